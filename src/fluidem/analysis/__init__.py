@@ -1,0 +1,1 @@
+"""Analyses: observers and functions that read the state and never change it."""

@@ -1,0 +1,92 @@
+"""Scalar probes of a particle system: energies, contacts, wall forces, packing."""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ..particles._softsphere_kernels import wall_contact
+from ._contacts_kernels import contact_counts
+
+
+def energies(engine) -> dict[str, float]:
+    """Kinetic, rotational and potential energy [J]; potential relative to the origin, −m g·x."""
+    st = engine.state
+    ke = 0.5 * float(np.sum(st.mass * np.einsum("ij,ij->i", st.velocity, st.velocity)))
+    re = 0.5 * float(np.sum(st.inertia * np.einsum("ij,ij->i", st.omega, st.omega)))
+    pe = -float(np.sum(st.mass * (st.position @ engine.gravity)))
+    return {"kinetic_J": ke, "rotational_J": re, "potential_J": pe}
+
+
+def contacts(engine) -> dict[str, float]:
+    """Particle contacts, coordination number (mean contacts per particle) and max overlap / diameter."""
+    st = engine.state
+    per, total, worst = contact_counts(st.position, st.radius, engine.row_start, engine.partner)
+    n = max(st.n, 1)
+    wall_contacts = 0
+    if engine.walls.planes:
+        point, normal = wall_positions(engine)
+        gap = np.einsum("nwk,wk->nw", st.position[:, None, :] - point[None, :, :], normal) - st.radius[:, None]
+        wall_contacts = int(np.sum(gap < 0))
+        worst = max(worst, float(np.max(-gap / (2 * st.radius[:, None]))))
+    return {"contacts": int(total), "wall_contacts": wall_contacts, "coordination": 2.0 * total / n,
+            "max_overlap_rel": float(max(worst, 0.0))}
+
+
+def wall_positions(engine):
+    from ..particles._softsphere_kernels import wall_state
+
+    point = np.empty_like(engine.wall_point0)
+    for w in range(point.shape[0]):
+        px, py, pz, *_ = wall_state(engine.wall_motion, engine.wall_point0, w, engine.time)
+        point[w] = (px, py, pz)
+    return point, engine.wall_normal
+
+
+@njit(cache=True)
+def _wall_totals(pos, vel, omega, radius, mass, species, pw, motion, point0, normal, wall_hist, t, dt):
+    nw = normal.shape[0]
+    out = np.zeros((nw, 3))
+    for i in range(pos.shape[0]):
+        for w in range(nw):
+            ov, fx, fy, fz, _, _, _ = wall_contact(i, w, pos, vel, omega, radius, mass, species, pw, motion,
+                                                   point0, normal, wall_hist, t, dt, False)
+            if ov > 0.0:
+                out[w, 0] -= fx  # force of the particles on the wall
+                out[w, 1] -= fy
+                out[w, 2] -= fz
+    return out
+
+
+def wall_forces(engine) -> dict[str, np.ndarray]:
+    """Force exerted by the particles on each wall plane [N], by plane name."""
+    st = engine.state
+    tot = _wall_totals(st.position, st.velocity, st.omega, st.radius, st.mass, st.species, engine.pw,
+                       engine.wall_motion, engine.wall_point0, engine.wall_normal, engine.wall_hist,
+                       engine.time, engine.dt)
+    return {name: tot[k] for k, name in enumerate(engine.walls.names)}
+
+
+def surface_packing_fraction(engine, samples_per_diameter: int = 20) -> float:
+    """Area fraction of a settled 2D bed, measured as Hoomans 1996 §5.1 does.
+
+    The area under the upper layer of particles is integrated along x: the free
+    surface h(x) is the highest particle boundary above each x (sampled finely);
+    the fraction is the particles' disc area over ∫ (h − y_floor) dx. The floor and
+    the side limits are the box walls (or the particles' extent without walls).
+    """
+    st = engine.state
+    if engine.walls.box_lower is not None:
+        x0, y0 = engine.walls.box_lower[0], engine.walls.box_lower[1]
+        x1 = engine.walls.box_upper[0]
+    else:
+        x0 = float(np.min(st.position[:, 0] - st.radius))
+        x1 = float(np.max(st.position[:, 0] + st.radius))
+        y0 = float(np.min(st.position[:, 1] - st.radius))
+    d = 2.0 * float(np.mean(st.radius))
+    xs = np.linspace(x0, x1, max(int((x1 - x0) / d * samples_per_diameter), 2))
+    dx = np.abs(xs[None, :] - st.position[:, 0:1])
+    top = np.where(dx < st.radius[:, None],
+                   st.position[:, 1:2] + np.sqrt(np.maximum(st.radius[:, None] ** 2 - dx**2, 0.0)), y0)
+    h = top.max(axis=0) - y0
+    area = np.trapezoid(h, xs)
+    return float(np.sum(np.pi * st.radius**2) / area)

@@ -1,0 +1,365 @@
+"""The case schema: validated, SI-unit input of a run, read from and written to TOML.
+
+Every choice is a named key; unknown keys are errors that list the allowed ones.
+``load_case(name_or_path, overrides)`` is what ``fluidem run CASE --set k=v`` calls.
+"""
+from __future__ import annotations
+
+import math
+import tomllib
+from importlib import resources
+from pathlib import Path
+from typing import Annotated, Any, Literal, Union
+
+import tomli_w
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from .errors import CaseError
+from .particles.contact import HertzMindlin, LinearSpringDashpot
+
+Vec3 = tuple[float, float, float]
+
+
+class Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", validate_assignment=True)
+
+
+ContactLaw = Annotated[Union[LinearSpringDashpot, HertzMindlin], Field(discriminator="model")]
+
+
+class SizeDistribution(Strict):
+    """Diameter distribution of a species; diameters are drawn once at set-up with the placement seed."""
+
+    kind: Literal["uniform", "normal", "lognormal"]
+    min: float | None = Field(None, gt=0.0, description="smallest diameter [m] (uniform: required)")
+    max: float | None = Field(None, gt=0.0, description="largest diameter [m] (uniform: required)")
+    std: float | None = Field(None, gt=0.0, description="standard deviation [m] (normal) or of ln d (lognormal)")
+
+    @model_validator(mode="after")
+    def _check(self):
+        if self.kind == "uniform" and (self.min is None or self.max is None):
+            raise ValueError("a uniform size_distribution needs min and max")
+        if self.kind in ("normal", "lognormal") and self.std is None:
+            raise ValueError(f"a {self.kind} size_distribution needs std")
+        if self.min is not None and self.max is not None and self.min > self.max:
+            raise ValueError(f"size_distribution min = {self.min} exceeds max = {self.max}")
+        return self
+
+
+class Species(Strict):
+    """One kind of particle."""
+
+    name: str = "particles"
+    diameter: float = Field(gt=0.0, description="diameter [m] (the mean if a size_distribution is given)")
+    density: float = Field(gt=0.0, description="material density [kg/m^3]")
+    count: int = Field(ge=0, description="number of particles")
+    size_distribution: SizeDistribution | None = None
+    youngs_modulus: float | None = Field(None, gt=0.0, description="E [Pa] for Hertz–Mindlin (default: the contact's)")
+    poisson_ratio: float | None = Field(None, gt=-1.0, lt=0.5, description="nu [-] for Hertz–Mindlin")
+
+
+class PairContact(Strict):
+    """Override of contact parameters for one species pair (e.g. restitution between species a and b)."""
+
+    species: tuple[str, str]
+    restitution: float | None = Field(None, gt=0.0, le=1.0)
+    friction: float | None = Field(None, ge=0.0)
+    stiffness: float | None = Field(None, gt=0.0)
+    damping: float | None = Field(None, ge=0.0)
+
+    def changes(self) -> dict:
+        return {k: v for k, v in self.model_dump(exclude={"species"}).items() if v is not None}
+
+
+class Placement(Strict):
+    """Initial positions: random non-overlapping fill, perturbed lattice (Hoomans 1996 §4.1) or a file."""
+
+    method: Literal["random", "lattice", "file"] = "random"
+    region_lower: Vec3 | None = Field(None, description="lower corner of the fill region [m]; default: the wall box")
+    region_upper: Vec3 | None = Field(None, description="upper corner of the fill region [m]; default: the wall box")
+    spacing: float = Field(1.05, ge=1.0, description="lattice pitch in largest diameters [-]")
+    perturbation: float = Field(0.02, ge=0.0, lt=0.5, description="lattice random shift, fraction of the diameter [-]")
+    file: str | None = Field(None, description="CSV (x,y,z,diameter[,species][,vx,vy,vz]) or HDF5 with those datasets")
+    seed: int = Field(12345, description="random seed of placement and size draws")
+    velocity: Vec3 = Field((0.0, 0.0, 0.0), description="initial velocity of every particle [m/s]")
+
+    @model_validator(mode="after")
+    def _check(self):
+        if self.method == "file" and not self.file:
+            raise ValueError("placement.method = 'file' needs placement.file")
+        return self
+
+
+class Motion(Strict):
+    """Prescribed wall motion: constant velocity or sinusoidal oscillation x = A sin(2π f t + φ)."""
+
+    kind: Literal["constant_velocity", "oscillation"]
+    velocity: Vec3 | None = Field(None, description="[m/s] for constant_velocity")
+    amplitude: Vec3 | None = Field(None, description="[m] displacement amplitude vector for oscillation")
+    frequency: float | None = Field(None, gt=0.0, description="[Hz] for oscillation")
+    phase: float = Field(0.0, description="[rad]")
+
+    @model_validator(mode="after")
+    def _check(self):
+        if self.kind == "constant_velocity" and self.velocity is None:
+            raise ValueError("motion kind 'constant_velocity' needs velocity")
+        if self.kind == "oscillation" and (self.amplitude is None or self.frequency is None):
+            raise ValueError("motion kind 'oscillation' needs amplitude and frequency")
+        return self
+
+
+class WallContact(Strict):
+    """Per-wall override of the particle–wall contact parameters."""
+
+    restitution: float | None = Field(None, gt=0.0, le=1.0)
+    friction: float | None = Field(None, ge=0.0)
+    stiffness: float | None = Field(None, gt=0.0)
+    damping: float | None = Field(None, ge=0.0)
+
+    def changes(self) -> dict:
+        return {k: v for k, v in self.model_dump().items() if v is not None}
+
+
+class Wall(Strict):
+    """A plane (point + inward normal) or an axis-aligned box of planes facing inwards."""
+
+    name: str = "wall"
+    kind: Literal["plane", "box"]
+    point: Vec3 | None = Field(None, description="a point of the plane [m]")
+    normal: Vec3 | None = Field(None, description="normal pointing into the particle region")
+    lower: Vec3 | None = Field(None, description="box lower corner [m]")
+    upper: Vec3 | None = Field(None, description="box upper corner [m]")
+    open_top: bool = Field(False, description="box without its upper wall along gravity")
+    motion: Motion | None = None
+    contact: WallContact | None = None
+    youngs_modulus: float | None = Field(None, gt=0.0, description="E [Pa] of the wall for Hertz–Mindlin")
+    poisson_ratio: float | None = Field(None, gt=-1.0, lt=0.5)
+
+    @model_validator(mode="after")
+    def _check(self):
+        if self.kind == "plane":
+            if self.point is None or self.normal is None:
+                raise ValueError(f"plane wall {self.name!r} needs point and normal")
+            if math.hypot(*self.normal) == 0:
+                raise ValueError(f"plane wall {self.name!r} has a zero normal")
+        else:
+            if self.lower is None or self.upper is None:
+                raise ValueError(f"box wall {self.name!r} needs lower and upper")
+            for a, b, ax in zip(self.lower, self.upper, "xyz"):
+                if not b > a:
+                    raise ValueError(f"box wall {self.name!r}: upper {ax} = {b} must exceed lower {ax} = {a}")
+        return self
+
+
+class Particles(Strict):
+    dimensions: Literal[2, 3] = Field(3, description="2: centres move in the x-y plane, spin about z only")
+    species: list[Species] = Field(min_length=1)
+    contact: ContactLaw
+    pairs: list[PairContact] = Field(default_factory=list, description="per species-pair overrides")
+    wall_contact: ContactLaw | None = Field(None, description="particle–wall law; default: the particle law")
+    placement: Placement = Field(default_factory=Placement)
+
+    @field_validator("species")
+    @classmethod
+    def _unique(cls, v):
+        names = [s.name for s in v]
+        if len(set(names)) != len(names):
+            raise ValueError(f"species names must be unique, got {names}")
+        return v
+
+    @model_validator(mode="after")
+    def _check_pairs(self):
+        names = {s.name for s in self.species}
+        for pc in self.pairs:
+            for s in pc.species:
+                if s not in names:
+                    raise ValueError(f"pairs: species {s!r} is not one of {sorted(names)}")
+        if self.wall_contact is not None and type(self.wall_contact) is not type(self.contact):
+            raise ValueError("wall_contact must use the same model as contact")
+        return self
+
+
+class Time(Strict):
+    end: float = Field(gt=0.0, description="simulated time to reach [s]")
+    dt: float | None = Field(None, gt=0.0, description="DEM time step [s]; default dt_fraction × t_c")
+    dt_fraction: float = Field(0.02, gt=0.0, le=0.1, description="dt / t_c when dt is not given (Sun 2007: 1/50)")
+    impact_velocity: float = Field(1.0, gt=0.0, description="impact speed for the Hertz contact time [m/s]")
+
+
+class Neighbours(Strict):
+    skin: float | None = Field(None, gt=0.0, description="Verlet skin [m]; default 0.25 × largest diameter")
+
+
+class Output(Strict):
+    snapshot_interval: float | None = Field(None, gt=0.0, description="[s] simulated; default end/100")
+    probe_interval: float | None = Field(None, gt=0.0, description="[s] simulated; default end/1000")
+    checkpoint_interval: float | None = Field(None, gt=0.0, description="[s] simulated; default end/10")
+    progress_interval: float = Field(2.0, gt=0.0, description="[s] wall time between progress lines")
+
+
+class Case(Strict):
+    """A complete run description in SI units."""
+
+    name: str = "case"
+    description: str = ""
+    gravity: Vec3 | None = Field(None, description="[m/s^2]; default −9.81 along y in 2D, along z in 3D")
+    particles: Particles
+    walls: list[Wall] = Field(default_factory=list)
+    time: Time
+    neighbours: Neighbours = Field(default_factory=Neighbours)
+    output: Output = Field(default_factory=Output)
+    threads: int | None = Field(None, ge=1, description="compute threads; default all cores")
+
+    @model_validator(mode="after")
+    def _defaults(self):
+        if self.gravity is None:
+            g = (0.0, -9.81, 0.0) if self.particles.dimensions == 2 else (0.0, 0.0, -9.81)
+            object.__setattr__(self, "gravity", g)
+        if self.particles.dimensions == 2 and self.gravity[2] != 0.0:
+            raise ValueError(f"gravity = {list(self.gravity)}: a 2D case needs gravity in the x-y plane (z = 0)")
+        names = [w.name for w in self.walls]
+        if len(set(names)) != len(names):
+            raise ValueError(f"wall names must be unique, got {names}")
+        return self
+
+    # ---------------------------------------------------------------- I/O
+    def to_toml(self) -> str:
+        return tomli_w.dumps(self.model_dump(mode="json", exclude_none=True))
+
+    def with_overrides(self, overrides: dict[str, Any]) -> "Case":
+        data = self.model_dump(mode="json", exclude_none=True)
+        apply_overrides(data, overrides)
+        return validate_case(data)
+
+
+# ------------------------------------------------------------------ loading
+def builtin_cases() -> dict[str, Path]:
+    folder = resources.files("fluidem") / "cases"
+    return {Path(p.name).stem: Path(str(p)) for p in folder.iterdir() if p.name.endswith(".toml")}
+
+
+def parse_value(text: str) -> Any:
+    """A --set value as TOML (numbers, booleans, arrays, quoted strings); bare words are strings."""
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        return text
+
+
+def apply_overrides(data: dict, overrides: dict[str, Any]) -> None:
+    for key, value in overrides.items():
+        parts = key.split(".")
+        node: Any = data
+        for depth, part in enumerate(parts[:-1]):
+            where = ".".join(parts[: depth + 1])
+            if isinstance(node, list):
+                if not part.isdigit() or int(part) >= len(node):
+                    raise CaseError(f"--set {key}: {where!r} needs a list index below {len(node)}")
+                node = node[int(part)]
+            elif isinstance(node, dict):
+                node = node.setdefault(part, {})
+            else:
+                raise CaseError(f"--set {key}: {where!r} is a value, not a section")
+        last = parts[-1]
+        if isinstance(node, list):
+            if not last.isdigit() or int(last) >= len(node):
+                raise CaseError(f"--set {key}: needs a list index below {len(node)}")
+            node[int(last)] = value
+        else:
+            node[last] = value
+
+
+def _allowed_keys(loc: tuple) -> list[str] | None:
+    """Field names allowed at the section ``loc`` names (best effort, for error messages)."""
+    model: Any = Case
+    for part in loc:
+        if isinstance(part, int):
+            continue
+        fields = getattr(model, "model_fields", None)
+        if fields is None:
+            return None
+        if part in fields:
+            ann = fields[part].annotation
+            model = _model_of(ann, None)
+        else:
+            from .particles.contact import contact_models
+
+            if part in contact_models:
+                model = contact_models.get(part)
+            else:
+                return None
+        if model is None:
+            return None
+    fields = getattr(model, "model_fields", None)
+    return sorted(fields) if fields else None
+
+
+def _model_of(ann, _):
+    import typing
+
+    if isinstance(ann, type) and issubclass(ann, BaseModel):
+        return ann
+    for arg in typing.get_args(ann):
+        m = _model_of(arg, None)
+        if m is not None:
+            return m
+    return None
+
+
+def format_validation_error(err: ValidationError) -> str:
+    lines = []
+    for e in err.errors():
+        loc = tuple(x for x in e["loc"] if not (isinstance(x, str) and x.startswith("function-")))
+        # drop discriminator tags from the printed path
+        from .particles.contact import contact_models
+
+        shown = ".".join(str(x) for x in loc if not (isinstance(x, str) and x in contact_models))
+        if e["type"] == "extra_forbidden":
+            allowed = _allowed_keys(loc[:-1])
+            extra = f"; allowed keys: {', '.join(allowed)}" if allowed else ""
+            lines.append(f"unknown key {shown!r} (value {e['input']!r}){extra}")
+        elif e["type"] == "missing":
+            lines.append(f"missing key {shown!r}")
+        elif e["type"] == "union_tag_invalid":
+            lines.append(f"{shown}: model = {e['input'].get('model') if isinstance(e['input'], dict) else e['input']!r}"
+                         f" is not a known model; allowed: {', '.join(contact_models.names())}")
+        elif e["type"] == "union_tag_not_found":
+            lines.append(f"{shown}: needs a 'model' key; allowed: {', '.join(contact_models.names())}")
+        else:
+            msg = e["msg"].removeprefix("Value error, ")
+            value = e.get("input")
+            if isinstance(value, dict):
+                lines.append(f"{shown or 'case'}: {msg}")
+            else:
+                lines.append(f"{shown} = {value!r}: {msg}")
+    return "invalid case:\n  " + "\n  ".join(lines)
+
+
+def validate_case(data: dict) -> Case:
+    try:
+        return Case.model_validate(data)
+    except ValidationError as err:
+        raise CaseError(format_validation_error(err)) from None
+
+
+def read_case_data(name_or_path: str | Path) -> dict:
+    builtin = builtin_cases()
+    path = Path(name_or_path)
+    if str(name_or_path) in builtin and not path.exists():
+        path = builtin[str(name_or_path)]
+    if not path.exists():
+        raise CaseError(
+            f"case {str(name_or_path)!r} is neither a TOML file nor a built-in case; built-in: {', '.join(sorted(builtin))}"
+        )
+    try:
+        return tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as err:
+        raise CaseError(f"case file {path}: not valid TOML: {err}") from None
+
+
+def load_case(name_or_path: str | Path, overrides: dict[str, Any] | None = None) -> Case:
+    """A validated Case from a built-in name or a TOML path, with dotted-key overrides applied."""
+    data = read_case_data(name_or_path)
+    if overrides:
+        apply_overrides(data, overrides)
+    return validate_case(data)

@@ -1,0 +1,1 @@
+"""Particle engines: soft-sphere DEM (``softsphere``), walls, neighbour lists and contact laws."""

@@ -1,0 +1,91 @@
+"""Compiled dispatch over contact models and the shared tangential-history update.
+
+``contact_force`` is the one place where a contact's force is assembled from a
+model's coefficients: normal spring + dashpot (Sun 2007 eq. 21), tangential
+spring + dashpot with history (eqs 19–20, 22) truncated at the Coulomb limit.
+Adding a model adds one branch to ``coefficients``.
+"""
+import math
+
+from numba import njit
+
+from . import hertz_mindlin, spring_dashpot
+
+
+@njit(cache=True)
+def coefficients(p, overlap, m_eff, r_eff):
+    """(elastic normal force [N], η_n [N s/m], k_t [N/m], η_t [N s/m]) of the model coded in p[0]."""
+    code = int(p[0])
+    if code == spring_dashpot.CODE:
+        return spring_dashpot.coefficients(p, overlap, m_eff, r_eff)
+    if code == hertz_mindlin.CODE:
+        return hertz_mindlin.coefficients(p, overlap, m_eff, r_eff)
+    return 0.0, 0.0, 0.0, 0.0
+
+
+@njit(cache=True)
+def contact_force(p, overlap, nx, ny, nz, vx, vy, vz, wx, wy, wz, m_eff, r_eff, dt, hx, hy, hz, update):
+    """Force on body i of a contact, and the updated tangential history.
+
+    Parameters
+    ----------
+    p : (8,) float64 packed parameters (see ``base.py``)
+    overlap : δ > 0 [m]
+    n : unit normal from j to i
+    v : v_i − v_j [m/s] (translational)
+    w : a_i ω_i + a_j ω_j [m/s] (rotational part of the contact-point velocity, Sun 2007 eq. 19)
+    h : tangential spring displacement u_t [m] before the step
+    update : if False the history is returned unchanged (force evaluation for analysis)
+
+    Returns
+    -------
+    (fn, ftx, fty, ftz, hx, hy, hz): signed normal force magnitude [N] along n
+    (positive = repulsive), tangential force on i [N], new history [m].
+    """
+    fel, eta_n, k_t, eta_t = coefficients(p, overlap, m_eff, r_eff)
+    vn = vx * nx + vy * ny + vz * nz
+    fn = fel - eta_n * vn  # Sun 2007 eq. 21 (unclamped, as eqs 25-26 assume)
+    # relative tangential velocity of the contact point, Sun 2007 eq. 19
+    cx = wy * nz - wz * ny
+    cy = wz * nx - wx * nz
+    cz = wx * ny - wy * nx
+    tx = vx - vn * nx - cx
+    ty = vy - vn * ny - cy
+    tz = vz - vn * nz - cz
+    # keep the history in the current tangent plane with its magnitude (rigid rotation, eq. 20)
+    hn = hx * nx + hy * ny + hz * nz
+    h2 = hx * hx + hy * hy + hz * hz
+    hx -= hn * nx
+    hy -= hn * ny
+    hz -= hn * nz
+    h2p = hx * hx + hy * hy + hz * hz
+    if h2p > 0.0:
+        s = math.sqrt(h2 / h2p)
+        hx *= s
+        hy *= s
+        hz *= s
+    if update:
+        hx += tx * dt
+        hy += ty * dt
+        hz += tz * dt
+    ftx = -k_t * hx - eta_t * tx  # Sun 2007 eq. 22
+    fty = -k_t * hy - eta_t * ty
+    ftz = -k_t * hz - eta_t * tz
+    ft = math.sqrt(ftx * ftx + fty * fty + ftz * ftz)
+    flim = p[7] * max(fn, 0.0)
+    if ft > flim:
+        # slip: Coulomb limit; the spring is reset to match the limited force
+        if ft > 0.0:
+            s = flim / ft
+            ftx *= s
+            fty *= s
+            ftz *= s
+        if k_t > 0.0:
+            hx = -(ftx + eta_t * tx) / k_t
+            hy = -(fty + eta_t * ty) / k_t
+            hz = -(ftz + eta_t * tz) / k_t
+        else:
+            hx = 0.0
+            hy = 0.0
+            hz = 0.0
+    return fn, ftx, fty, ftz, hx, hy, hz

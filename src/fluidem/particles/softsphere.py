@@ -1,0 +1,191 @@
+"""Soft-sphere DEM engine: owns particle state, contact tables, walls and the Verlet list.
+
+``SoftSphereEngine.advance(nsteps)`` runs that many DEM steps in one compiled call
+(``_softsphere_kernels.advance``); all per-particle work happens there. The engine
+can be used without a ``Simulation`` (tests drive it directly).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import CaseError
+from ..state import ParticleState
+from . import _softsphere_kernels as K
+from ._neighbours_kernels import build_pairs
+from .contact.base import N_SLOTS
+from .placement import place
+from .walls import build_walls
+
+STABILITY_FRACTION = 0.1  # dt must stay below t_c / 10: at least ten steps per contact
+
+
+class SoftSphereEngine:
+    """Velocity-Verlet soft-sphere DEM with cell + Verlet lists (Sun 2007 eqs 15–26)."""
+
+    def __init__(self, case, state: ParticleState | None = None):
+        self.case = case
+        self.dim2 = case.particles.dimensions == 2
+        self.walls = build_walls(case)
+        if state is None:
+            pos, vel, diam, spec = place(case, self.walls)
+            dens = np.array([s.density for s in case.particles.species])
+            state = ParticleState.create(pos, vel, diam, spec, dens)
+        self.state = state
+        st = state
+        self.inv_mass = 1.0 / st.mass
+        self.inv_inertia = 1.0 / st.inertia
+        self.gravity = np.array(case.gravity, float)
+        self.ext_force = np.zeros_like(st.position)
+        self.pp, self.pw, self.contact_times = self._contact_tables()
+        self.wall_point0, self.wall_normal, self.wall_motion = self.walls.arrays()
+        self.wall_hist = np.zeros((st.n, len(self.walls.planes), 3))
+        dmax = 2.0 * st.radius.max() if st.n else 0.0
+        self.skin = case.neighbours.skin if case.neighbours.skin is not None else 0.25 * dmax
+        self.dt = self._time_step()
+        self.time = 0.0
+        self.steps = 0
+        self.rebuilds = 0
+        self.ref_pos = st.position.copy()
+        self.row_start, self.partner, self.trans_start, self.trans_pair = build_pairs(
+            st.position, st.radius, self.skin, self.dim2)
+        self.hist = np.zeros((self.partner.shape[0], 3))
+        self._compute_forces(update=False)
+
+    # ------------------------------------------------------------ set-up
+    def law_for_pair(self, a: int, b: int):
+        p = self.case.particles
+        law = p.contact
+        names = (p.species[a].name, p.species[b].name)
+        for pc in p.pairs:
+            if sorted(pc.species) == sorted(names):
+                law = type(law).model_validate({**law.model_dump(), **pc.changes()})
+        return law
+
+    def law_for_wall(self, plane):
+        p = self.case.particles
+        law = p.wall_contact if p.wall_contact is not None else p.contact
+        if plane.source.contact is not None:
+            law = type(law).model_validate({**law.model_dump(), **plane.source.contact.changes()})
+        return law
+
+    def _contact_tables(self):
+        sp = self.case.particles.species
+        ns, nw = len(sp), len(self.walls.planes)
+        pp = np.zeros((ns, ns, N_SLOTS))
+        pw = np.zeros((ns, max(nw, 1), N_SLOTS))
+        st = self.state
+        times = []
+        v = self.case.time.impact_velocity
+        # the lightest particle of each species sets the shortest contact time
+        m_min = np.array([st.mass[st.species == k].min() if np.any(st.species == k) else np.inf for k in range(ns)])
+        r_min = np.array([st.radius[st.species == k].min() if np.any(st.species == k) else np.inf for k in range(ns)])
+        for a in range(ns):
+            for b in range(ns):
+                law = self.law_for_pair(a, b)
+                pp[a, b] = law.pack(sp[a], sp[b])
+                if np.isfinite(m_min[a]) and np.isfinite(m_min[b]):
+                    m_eff = m_min[a] * m_min[b] / (m_min[a] + m_min[b])
+                    r_eff = r_min[a] * r_min[b] / (r_min[a] + r_min[b])
+                    times.append((law.contact_time(m_eff, r_eff, v, sp[a], sp[b]), f"species {sp[a].name}–{sp[b].name}"))
+            for w, plane in enumerate(self.walls.planes):
+                law = self.law_for_wall(plane)
+                pw[a, w] = law.pack(sp[a], plane.source)
+                if np.isfinite(m_min[a]):
+                    times.append((law.contact_time(m_min[a], r_min[a], v, sp[a], plane.source),
+                                  f"species {sp[a].name}–wall {plane.name}"))
+        return pp, pw, times
+
+    def _time_step(self) -> float:
+        t = self.case.time
+        if not self.contact_times:
+            return t.dt if t.dt is not None else 1e-4
+        tc, what = min(self.contact_times)
+        if not math.isfinite(tc):
+            raise CaseError(f"particles.contact: the contact of {what} is overdamped (no rebound); lower the damping")
+        self.contact_time, self.contact_time_of = tc, what
+        if t.dt is None:
+            return t.dt_fraction * tc
+        limit = STABILITY_FRACTION * tc
+        if t.dt > limit:
+            raise CaseError(
+                f"time.dt = {t.dt:.4g} s is above the stability limit {limit:.4g} s "
+                f"(t_c/10 with the contact time t_c = {tc:.4g} s of {what}); use dt <= {limit:.4g} or leave dt unset "
+                f"for t_c/50 (Sun 2007)"
+            )
+        return t.dt
+
+    def check_initial_overlaps(self, tolerance: float = 1e-9) -> None:
+        """Raise CaseError if two particles, or a particle and a wall, overlap at the start."""
+        st = self.state
+        rs, partner, _, _ = build_pairs(st.position, st.radius, 0.0, self.dim2)
+        if partner.size:
+            i = np.repeat(np.arange(st.n), np.diff(rs))
+            d = np.linalg.norm(st.position[i] - st.position[partner], axis=1)
+            ov = st.radius[i] + st.radius[partner] - d
+            bad = np.flatnonzero(ov > tolerance * (st.radius[i] + st.radius[partner]))
+            if bad.size:
+                k = bad[np.argmax(ov[bad])]
+                raise CaseError(
+                    f"initial particles overlap: {bad.size} pair(s), e.g. particles {i[k]} and {partner[k]} by "
+                    f"{ov[k]:.3g} m; particles must start apart"
+                )
+        for w, plane in enumerate(self.walls.planes):
+            gap = (st.position - plane.point) @ plane.normal - st.radius
+            bad = np.flatnonzero(gap < -tolerance * st.radius)
+            if bad.size:
+                raise CaseError(
+                    f"initial particles cross wall {plane.name}: {bad.size} particle(s), e.g. particle {bad[0]} "
+                    f"by {-gap[bad[0]]:.3g} m"
+                )
+
+    # ------------------------------------------------------------ stepping
+    def _compute_forces(self, update: bool):
+        st = self.state
+        npairs = self.partner.shape[0]
+        K.compute_forces(st.position, st.velocity, st.omega, st.radius, st.mass, st.species, self.pp, self.pw,
+                         self.wall_motion, self.wall_point0, self.wall_normal, self.wall_hist, self.gravity,
+                         self.ext_force, self.dim2, self.row_start, self.partner, self.hist, self.trans_start,
+                         self.trans_pair, np.zeros((npairs, 3)), np.zeros((npairs, 3)), self.time, self.dt,
+                         update, st.force, st.torque)
+
+    def advance(self, nsteps: int) -> None:
+        """Run ``nsteps`` DEM steps of ``self.dt`` in one compiled call."""
+        if nsteps <= 0:
+            return
+        st = self.state
+        (self.row_start, self.partner, self.hist, self.trans_start, self.trans_pair, nreb) = K.advance(
+            st.position, st.velocity, st.omega, st.force, st.torque, st.radius, st.mass, self.inv_mass,
+            self.inv_inertia, st.species, self.pp, self.pw, self.wall_motion, self.wall_point0, self.wall_normal,
+            self.wall_hist, self.gravity, self.ext_force, self.dim2, self.row_start, self.partner, self.hist,
+            self.trans_start, self.trans_pair, self.ref_pos, self.skin, self.steps, self.dt, nsteps)
+        self.steps += nsteps
+        self.time = self.steps * self.dt
+        self.rebuilds += nreb
+
+    # ------------------------------------------------------------ checkpoint
+    def checkpoint_arrays(self) -> dict[str, np.ndarray]:
+        """Everything needed to continue bit-for-bit."""
+        out = {f"state/{k}": v for k, v in self.state.arrays().items()}
+        out.update({
+            "engine/wall_hist": self.wall_hist, "engine/ref_pos": self.ref_pos, "engine/row_start": self.row_start,
+            "engine/partner": self.partner, "engine/hist": self.hist, "engine/trans_start": self.trans_start,
+            "engine/trans_pair": self.trans_pair, "engine/ext_force": self.ext_force,
+        })
+        return out
+
+    def checkpoint_scalars(self) -> dict:
+        return {"steps": self.steps, "dt": self.dt, "rebuilds": self.rebuilds}
+
+    def restore(self, arrays: dict[str, np.ndarray], scalars: dict) -> None:
+        for k in self.state.arrays():
+            getattr(self.state, k)[...] = arrays[f"state/{k}"]
+        for k in ("wall_hist", "ref_pos", "ext_force"):
+            getattr(self, k)[...] = arrays[f"engine/{k}"]
+        for k in ("row_start", "partner", "hist", "trans_start", "trans_pair"):
+            setattr(self, k, np.ascontiguousarray(arrays[f"engine/{k}"]))
+        self.dt = float(scalars["dt"])
+        self.steps = int(scalars["steps"])
+        self.rebuilds = int(scalars["rebuilds"])
+        self.time = self.steps * self.dt

@@ -1,0 +1,298 @@
+"""Simulation: the clock, the step loop, observers, run directory and checkpoints.
+
+The case says *what*, ``Simulation.run(until=…)`` says *for how long*, observers
+say *what to keep*. Observers are objects with ``schedule`` (``Every``/``EveryTime``),
+``__call__(sim)`` and optionally ``finalize(sim)``; they read state, never write it.
+"""
+from __future__ import annotations
+
+import json
+import math
+import sys
+import time as _time
+from pathlib import Path
+
+import numpy as np
+
+from . import _threads
+from .analysis import probes as P
+from .case import Case, validate_case
+from .errors import CaseError
+from .io.atomic import write_text_atomic
+from .io.probes_csv import ProbeWriter
+from .io.restart import RESTART_NAME, load_restart, save_restart
+from .io.snapshots import ParticleWriter
+from .particles.softsphere import SoftSphereEngine
+from .schedule import EveryTime
+
+CHUNK_WALL_SECONDS = 0.25  # a compiled chunk should return to Python about this often (Ctrl-C, progress)
+
+
+class Checkpointer:
+    """Observer writing ``restart.h5`` atomically."""
+
+    def __init__(self, out_dir: Path, schedule):
+        self.path = Path(out_dir) / RESTART_NAME
+        self.schedule = schedule
+
+    def __call__(self, sim) -> None:
+        sim.save_checkpoint(self.path)
+
+
+class Progress:
+    """Prints simulated time, wall time, ETA and particle-steps/s every ``interval`` wall seconds."""
+
+    def __init__(self, interval: float = 2.0, stream=None):
+        self.interval = interval
+        self.stream = stream or sys.stderr
+        self._last = None
+
+    def maybe(self, sim, until: float, force: bool = False) -> None:
+        now = _time.perf_counter()
+        if self._last is None:
+            self._last = now
+        if not force and now - self._last < self.interval:
+            return
+        self._last = now
+        wall = now - sim._run_wall_start
+        done = sim.time - sim._run_time_start
+        left = until - sim.time
+        eta = wall / done * left if done > 0 else math.nan
+        rate = sim._run_particle_steps / wall if wall > 0 else 0.0
+        print(f"t = {sim.time:.4f} / {until:.4f} s   wall {wall:7.1f} s   ETA {eta:7.1f} s   "
+              f"{rate:.3g} particle-steps/s", file=self.stream, flush=True)
+
+
+class Simulation:
+    """A run of a case: owns the engine and clock; optional run directory ``out_dir``.
+
+    ``resume=True`` continues from ``out_dir/restart.h5``.
+    """
+
+    def __init__(self, case: Case, out_dir: str | Path | None = None, resume: bool = False, progress: bool = False):
+        self.case = case
+        self.threads = _threads.set_threads(case.threads)
+        self.engine = SoftSphereEngine(case)
+        if not resume:
+            self.engine.check_initial_overlaps()
+        self.out_dir = Path(out_dir) if out_dir is not None else None
+        self.observers: dict = {}
+        self.progress = Progress(case.output.progress_interval) if progress else None
+        self.status = "created"
+        self.wall_time = 0.0
+        self.particle_steps = 0
+        self._summary_extra: dict = {}
+        if self.out_dir is not None:
+            self._prepare_run_directory(resume)
+            self._default_observers()
+            if resume:
+                self.load_checkpoint(self.out_dir / RESTART_NAME)
+                for obs in self.observers.values():
+                    if hasattr(obs, "truncate_after"):
+                        obs.truncate_after(self.time)
+
+    # ------------------------------------------------------------ clock
+    @property
+    def dt(self) -> float:
+        return self.engine.dt
+
+    @property
+    def step(self) -> int:
+        return self.engine.steps
+
+    @property
+    def time(self) -> float:
+        return self.engine.time
+
+    @property
+    def state(self):
+        return self.engine.state
+
+    # ------------------------------------------------------------ run directory
+    def _prepare_run_directory(self, resume: bool) -> None:
+        out = self.out_dir
+        if resume:
+            if not (out / RESTART_NAME).exists():
+                raise CaseError(f"--resume {out}: no {RESTART_NAME} there")
+            return
+        if out.exists() and not out.is_dir():
+            raise CaseError(f"output folder {str(out)!r} is a file")
+        if out.exists() and any(out.iterdir()):
+            raise CaseError(f"output folder {str(out)!r} exists and is not empty; choose another --out or --resume it")
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+            probe = out / ".write-test"
+            probe.write_text("")
+            probe.unlink()
+        except OSError as err:
+            raise CaseError(f"output folder {str(out)!r} is not writable: {err.strerror or err}") from None
+        case = self.case.model_copy(deep=True)
+        case.time.dt = self.engine.dt
+        write_text_atomic(out / "case.toml", case.to_toml())
+
+    def _default_observers(self) -> None:
+        o = self.case.output
+        end = self.case.time.end
+        self.observers["snapshots"] = ParticleWriter(self.out_dir, EveryTime(o.snapshot_interval or end / 100))
+        self.observers["probes"] = ProbeWriter(
+            self.out_dir, [lambda s: P.energies(s.engine), lambda s: P.contacts(s.engine)],
+            EveryTime(o.probe_interval or end / 1000))
+        self.observers["checkpoint"] = Checkpointer(self.out_dir, EveryTime(o.checkpoint_interval or end / 10))
+
+    # ------------------------------------------------------------ stepping
+    def step_once(self, nsteps: int = 1) -> None:
+        """Advance ``nsteps`` DEM steps (no observers)."""
+        self.engine.advance(nsteps)
+        self.particle_steps += nsteps * self.engine.state.n
+
+    def run(self, until: float | None = None) -> dict:
+        """Advance to simulated time ``until`` (default the case's end), firing observers; returns the summary."""
+        until = self.case.time.end if until is None else until
+        target = int(round(until / self.dt))
+        self._run_wall_start = _time.perf_counter()
+        self._run_time_start = self.time
+        self._run_particle_steps = 0
+        wall0 = self.wall_time
+        nxt = {k: o.schedule.next_step(self.step, self.dt) for k, o in self.observers.items()}
+        if self.step == 0:
+            for obs in self.observers.values():
+                obs(self)
+        chunk = 64
+        self.status = "running"
+        self._stop_requested = False
+        handlers = self._install_signal_handlers()
+        try:
+            while self.step < target:
+                if self._stop_requested:
+                    raise KeyboardInterrupt
+                stop = min([target, self.step + chunk] + list(nxt.values()))
+                t0 = _time.perf_counter()
+                n = stop - self.step
+                self.step_once(n)
+                self._run_particle_steps += n * self.engine.state.n
+                spent = _time.perf_counter() - t0
+                # aim for CHUNK_WALL_SECONDS per compiled call
+                if spent > 0:
+                    chunk = int(min(max(1, n * CHUNK_WALL_SECONDS / spent), 4 * chunk + 1))
+                self.wall_time = wall0 + _time.perf_counter() - self._run_wall_start
+                for k, obs in self.observers.items():
+                    if self.step >= nxt[k]:
+                        obs(self)
+                        nxt[k] = obs.schedule.next_step(self.step, self.dt)
+                if self.progress is not None:
+                    self.progress.maybe(self, until)
+                self._check_finite()
+        except KeyboardInterrupt:
+            self.status = "interrupted"
+            self._finish(interrupted=True)
+            raise
+        except FloatingPointError as err:
+            self.status = f"error: {err}"
+            self._finish(interrupted=True)
+            raise
+        finally:
+            self._restore_signal_handlers(handlers)
+        self.wall_time = wall0 + _time.perf_counter() - self._run_wall_start
+        if self.progress is not None:
+            self.progress.maybe(self, until, force=True)
+        self.status = "completed" if self.time >= self.case.time.end - 0.5 * self.dt else "stopped"
+        return self._finish()
+
+    def _install_signal_handlers(self):
+        """Ctrl-C / SIGTERM set a flag; the loop stops between compiled chunks with a checkpoint."""
+        import signal
+        import threading
+
+        if threading.current_thread() is not threading.main_thread():
+            return None
+
+        def request_stop(signum, frame):
+            self._stop_requested = True
+
+        old = {}
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            old[sig] = signal.signal(sig, request_stop)
+        return old
+
+    @staticmethod
+    def _restore_signal_handlers(old) -> None:
+        import signal
+
+        for sig, h in (old or {}).items():
+            signal.signal(sig, h)
+
+    def _check_finite(self) -> None:
+        st = self.engine.state
+        if not np.isfinite(st.position).all():
+            raise FloatingPointError(f"particle positions became non-finite at t = {self.time:.6g} s "
+                                     f"(time step too large or contact parameters too stiff?)")
+
+    def _finish(self, interrupted: bool = False) -> dict:
+        if self.out_dir is not None and "checkpoint" in self.observers:
+            self.save_checkpoint(self.out_dir / RESTART_NAME)
+        for obs in self.observers.values():
+            if hasattr(obs, "finalize"):
+                obs.finalize(self)
+        summary = self.summary()
+        if self.out_dir is not None:
+            write_text_atomic(self.out_dir / "summary.json", json.dumps(summary, indent=2) + "\n")
+        return summary
+
+    # ------------------------------------------------------------ results
+    def summary(self) -> dict:
+        eng = self.engine
+        c = P.contacts(eng)
+        e = P.energies(eng)
+        out = {
+            "case": self.case.name,
+            "status": self.status,
+            "sim_time_s": self.time,
+            "wall_time_s": self.wall_time,
+            "n_particles": eng.state.n,
+            "particle_steps_per_s": self.particle_steps / self.wall_time if self.wall_time > 0 else None,
+            "steps": self.step,
+            "dt_s": self.dt,
+            "contact_time_s": getattr(eng, "contact_time", None),
+            "neighbour_rebuilds": eng.rebuilds,
+            "threads": self.threads,
+            "coordination_number": c["coordination"],
+            "max_overlap_rel": c["max_overlap_rel"],
+            "kinetic_energy_J": e["kinetic_J"],
+            "mean_bed_height_m": self.mean_height(),
+        }
+        if self.case.particles.dimensions == 2:
+            out["packing_fraction"] = P.surface_packing_fraction(eng)
+        out.update(self._summary_extra)
+        return out
+
+    def mean_height(self) -> float:
+        g = self.engine.gravity
+        gn = np.linalg.norm(g)
+        if gn == 0:
+            return float("nan")
+        up = -g / gn
+        st = self.engine.state
+        floor = float(self.engine.walls.box_lower @ up) if self.engine.walls.box_lower is not None else 0.0
+        return float(np.mean(st.position @ up) - floor)
+
+    # ------------------------------------------------------------ checkpoints
+    def save_checkpoint(self, path: Path) -> None:
+        scalars = dict(self.engine.checkpoint_scalars(), wall_time=self.wall_time, particle_steps=self.particle_steps)
+        save_restart(path, self.engine.checkpoint_arrays(), scalars, self.case.to_toml())
+
+    def load_checkpoint(self, path: Path) -> None:
+        arrays, scalars, _ = load_restart(path)
+        self.engine.restore(arrays, scalars)
+        self.wall_time = float(scalars.get("wall_time", 0.0))
+        self.particle_steps = int(scalars.get("particle_steps", 0))
+
+    @classmethod
+    def resume(cls, out_dir: str | Path, progress: bool = False) -> "Simulation":
+        """Continue the run in ``out_dir`` from its last checkpoint."""
+        import tomllib
+
+        out_dir = Path(out_dir)
+        if not (out_dir / "case.toml").exists():
+            raise CaseError(f"--resume {out_dir}: not a run directory (no case.toml)")
+        case = validate_case(tomllib.loads((out_dir / "case.toml").read_text()))
+        return cls(case, out_dir=out_dir, resume=True, progress=progress)

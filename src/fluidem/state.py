@@ -1,0 +1,50 @@
+"""Simulation state as structures of arrays: every particle field is a NumPy array, (N, 3) for vectors."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass
+class ParticleState:
+    """Particle fields in SI units; the engine updates them in place.
+
+    position, velocity, omega, force, torque : (N, 3) float64 [m, m/s, rad/s, N, N m]
+    radius, mass, inertia : (N,) float64 [m, kg, kg m^2]
+    species : (N,) int64 index into the case's species list
+    """
+
+    position: np.ndarray
+    velocity: np.ndarray
+    omega: np.ndarray
+    force: np.ndarray
+    torque: np.ndarray
+    radius: np.ndarray
+    mass: np.ndarray
+    inertia: np.ndarray
+    species: np.ndarray
+
+    @classmethod
+    def create(cls, position, velocity, diameter, species, densities) -> "ParticleState":
+        n = position.shape[0]
+        radius = 0.5 * np.asarray(diameter, float)
+        mass = np.asarray(densities)[species] * (4.0 / 3.0) * np.pi * radius**3
+        return cls(
+            position=np.ascontiguousarray(position, float),
+            velocity=np.ascontiguousarray(velocity, float),
+            omega=np.zeros((n, 3)),
+            force=np.zeros((n, 3)),
+            torque=np.zeros((n, 3)),
+            radius=radius,
+            mass=mass,
+            inertia=0.4 * mass * radius**2,  # solid sphere
+            species=np.asarray(species, np.int64),
+        )
+
+    @property
+    def n(self) -> int:
+        return self.position.shape[0]
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        return {k: getattr(self, k) for k in self.__dataclass_fields__}

@@ -373,44 +373,53 @@ def run_deck(code: str, deck: str, workdir: Path, ranks: int, timeout: float):
     return r.returncode, r.stdout + r.stderr, cmd
 
 
-def cpu_busy_cores(sample_s: float = 1.0):
-    """Cores kept busy by other processes over a short sample (Linux /proc/stat), or None."""
-    def snap():
-        with open("/proc/stat") as f:
-            v = [int(x) for x in f.readline().split()[1:]]
-        idle = v[3] + (v[4] if len(v) > 4 else 0)
-        return sum(v[:8]) - idle, sum(v[:8])
-    try:
-        b0, t0 = snap()
-        time.sleep(sample_s)
-        b1, t1 = snap()
-        return (os.cpu_count() or 1) * (b1 - b0) / max(t1 - t0, 1)
-    except (OSError, ValueError):
-        return None
-
-
 def _tail(text: str, n: int = 15) -> str:
     return "\n".join(text.strip().splitlines()[-n:])
 
 
+def _cpu_snapshot():
+    """(busy CPU seconds of the whole machine, CPU seconds of our reaped children)."""
+    import resource
+    ru = resource.getrusage(resource.RUSAGE_CHILDREN)
+    try:
+        with open("/proc/stat") as f:
+            v = [int(x) for x in f.readline().split()[1:]]
+        busy = (sum(v[:8]) - v[3] - v[4]) / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError):
+        busy = float("nan")
+    return busy, ru.ru_utime + ru.ru_stime
+
+
 def run_one(code: str, bed: dict, steps: int, ranks: int, warmup: int = 100,
-            timeout: float = 900.0, keep_dir=None) -> dict:
+            timeout: float = 900.0, keep_dir=None, repeat: int = 1) -> dict:
+    """Run one peer on the bed `repeat` times; report the fastest stepping loop."""
     n = int(len(bed["diameter"]))
     row = {"code": code, "ranks": int(ranks), "n_particles": n, "steps": int(steps)}
     if code not in CODES:
         row["error"] = f"unknown code {code!r}; known: {', '.join(CODES)}"
         return row
     tmp = Path(tempfile.mkdtemp(prefix=f"peers_{code}_{ranks}_", dir=keep_dir))
+    runs = []
     try:
         write_data_file(tmp / "bed.data", bed)
         vals = deck_values(bed, "bed.data")
         vals.update(steps=str(int(steps)), warmup=str(int(warmup)),
                     thermo=str(max(int(steps), 1)))
         deck = (LAMMPS_DECK if code == "lammps" else LIGGGHTS_DECK).substitute(vals)
-        load = cpu_busy_cores()
-        t0 = time.perf_counter()
-        rc, out, cmd = run_deck(code, deck, tmp, ranks, timeout)
-        wall = time.perf_counter() - t0
+        for _ in range(max(int(repeat), 1)):
+            b0, c0 = _cpu_snapshot()
+            t0 = time.perf_counter()
+            rc, out, cmd = run_deck(code, deck, tmp, ranks, timeout)
+            wall = time.perf_counter() - t0
+            b1, c1 = _cpu_snapshot()
+            loops = LOOP_RE.findall(out)
+            if rc != 0 or not loops:
+                row["error"] = (f"{code} failed (exit {rc}) in {tmp}; command: "
+                                f"{' '.join(cmd)}\n" + _tail(out))
+                return row
+            # cores kept busy by other processes while this run went on
+            others = max(((b1 - b0) - (c1 - c0)) / wall, 0.0) if wall > 0 else 0.0
+            runs.append((float(loops[-1][0]), loops[-1], out, wall, others))
     except FileNotFoundError as exc:
         row["error"] = str(exc)
         return row
@@ -420,27 +429,24 @@ def run_one(code: str, bed: dict, steps: int, ranks: int, warmup: int = 100,
     except Exception as exc:                                  # never a traceback
         row["error"] = f"{type(exc).__name__}: {exc}"
         return row
-    loops = LOOP_RE.findall(out)
-    if rc != 0 or not loops:
-        row["error"] = (f"{code} failed (exit {rc}) in {tmp}; command: {' '.join(cmd)}\n"
-                        + _tail(out))
-        return row
-    loop_t, procs, nsteps, natoms = loops[-1]
-    loop_t, nsteps, natoms = float(loop_t), int(nsteps), int(natoms)
+    loop_t, (_, procs, nsteps, natoms), out, wall, others = min(runs, key=lambda r: r[0])
+    nsteps, natoms = int(nsteps), int(natoms)
     row.update(loop_time_s=loop_t,
                particle_steps_per_s=natoms * nsteps / loop_t if loop_t > 0 else float("inf"),
                version=parse_version(code, out))
+    if len(runs) > 1:
+        row["loop_times_s"] = [r[0] for r in runs]
     if natoms != n or nsteps != steps or int(procs) != ranks:
         row["warning"] = f"log says {natoms} atoms, {nsteps} steps, {procs} procs"
     m = re.findall(r"Neighbor list builds\s*=\s*(\d+)", out)
     if m:
         row["neighbor_builds"] = int(m[-1])
     row["wall_time_s"] = round(wall, 3)
-    if load is not None:            # a busy machine skews the figures, 2-rank runs most
-        row["busy_cores_before"] = round(load, 2)
-        if load > 0.3:
+    if math.isfinite(others):       # a busy machine skews the figures, 2-rank runs most
+        row["other_busy_cores"] = round(others, 2)
+        if others > 0.25:
             row["warning"] = (row["warning"] + "; " if "warning" in row else "") + \
-                f"machine busy before the run ({load:.2f} cores in use by others)"
+                f"other processes kept {others:.2f} cores busy during the run"
     row["command"] = " ".join(cmd)
     if keep_dir is None:
         shutil.rmtree(tmp, ignore_errors=True)
@@ -450,7 +456,8 @@ def run_one(code: str, bed: dict, steps: int, ranks: int, warmup: int = 100,
 
 
 def run_peers(bed_path, steps: int = 2000, ranks=(1, 2), codes=CODES, warmup: int = 100,
-              timeout: float = 900.0, install: bool = False, keep_dir=None) -> list:
+              timeout: float = 900.0, install: bool = False, keep_dir=None,
+              repeat: int = 1) -> list:
     """Run each peer code at each rank count on the bed; one dict per (code, ranks)."""
     if isinstance(ranks, (int, str)):
         ranks = [int(r) for r in str(ranks).split(",") if r.strip()]
@@ -465,7 +472,7 @@ def run_peers(bed_path, steps: int = 2000, ranks=(1, 2), codes=CODES, warmup: in
         (any(r > 1 for r in ranks) and mpi_launcher(2) is None)
     if install and missing:
         print("[run_peers] " + install_peers(), file=sys.stderr)
-    return [run_one(c, bed, steps, int(r), warmup, timeout, keep_dir)
+    return [run_one(c, bed, steps, int(r), warmup, timeout, keep_dir, repeat)
             for c in codes for r in ranks]
 
 
@@ -668,6 +675,8 @@ def main(argv=None) -> int:
                     help="apt-get install lammps liggghts openmpi-bin if missing")
     ap.add_argument("--warmup", type=int, default=100, help="untimed steps first (100)")
     ap.add_argument("--timeout", type=float, default=900.0, help="per run, seconds")
+    ap.add_argument("--repeat", type=int, default=1,
+                    help="runs per (code, ranks); the fastest loop is reported (1)")
     ap.add_argument("--keep", metavar="DIR", help="keep decks/logs in DIR")
     ap.add_argument("--stats", action="store_true", help="also print bed statistics")
     ap.add_argument("--stats-only", action="store_true", help="only print bed statistics")
@@ -709,8 +718,12 @@ def main(argv=None) -> int:
         if a.stats_only:
             return 0
 
-    rows = run_peers(a.bed, a.steps, ranks, codes, a.warmup, a.timeout, a.install, a.keep)
+    rows = run_peers(a.bed, a.steps, ranks, codes, a.warmup, a.timeout, a.install, a.keep,
+                     a.repeat)
     print(format_rows(rows))
+    for r in rows:
+        if "warning" in r:
+            print(f"warning: {r['code']} x{r['ranks']}: {r['warning']}", file=sys.stderr)
     for r in rows:
         if "error" in r and "\n" in r["error"]:
             print(f"\n--- {r['code']} x{r['ranks']} ---\n{r['error']}", file=sys.stderr)

@@ -247,26 +247,27 @@ def parse_value(text: str) -> Any:
 
 
 def apply_overrides(data: dict, overrides: dict[str, Any]) -> None:
+    """Set dotted keys (``a.b.0.c``) in raw case data; list items by index."""
     for key, value in overrides.items():
         parts = key.split(".")
         node: Any = data
-        for depth, part in enumerate(parts[:-1]):
-            where = ".".join(parts[: depth + 1])
+        for depth, part in enumerate(parts):
+            where = ".".join(parts[:depth])
+            last = depth == len(parts) - 1
             if isinstance(node, list):
                 if not part.isdigit() or int(part) >= len(node):
-                    raise CaseError(f"--set {key}: {where!r} needs a list index below {len(node)}")
-                node = node[int(part)]
+                    raise CaseError(f"--set {key}: {where!r} is a list and needs a list index below {len(node)}")
+                if last:
+                    node[int(part)] = value
+                else:
+                    node = node[int(part)]
             elif isinstance(node, dict):
-                node = node.setdefault(part, {})
+                if last:
+                    node[part] = value
+                else:
+                    node = node.setdefault(part, {})
             else:
-                raise CaseError(f"--set {key}: {where!r} is a value, not a section")
-        last = parts[-1]
-        if isinstance(node, list):
-            if not last.isdigit() or int(last) >= len(node):
-                raise CaseError(f"--set {key}: needs a list index below {len(node)}")
-            node[int(last)] = value
-        else:
-            node[last] = value
+                raise CaseError(f"--set {key}: {where!r} is a value, not a section (it is {node!r})")
 
 
 def _allowed_keys(loc: tuple) -> list[str] | None:
@@ -352,9 +353,16 @@ def read_case_data(name_or_path: str | Path) -> dict:
             f"case {str(name_or_path)!r} is neither a TOML file nor a built-in case; built-in: {', '.join(sorted(builtin))}"
         )
     try:
-        return tomllib.loads(path.read_text())
+        data = tomllib.loads(path.read_text())
     except tomllib.TOMLDecodeError as err:
         raise CaseError(f"case file {path}: not valid TOML: {err}") from None
+    # a placement file named relative to the case file is found beside it
+    placement = data.get("particles", {}).get("placement", {}) if isinstance(data.get("particles"), dict) else {}
+    if isinstance(placement, dict) and isinstance(placement.get("file"), str):
+        f = Path(placement["file"])
+        if not f.is_absolute() and (path.parent / f).exists():
+            placement["file"] = str((path.parent / f).resolve())
+    return data
 
 
 def load_case(name_or_path: str | Path, overrides: dict[str, Any] | None = None) -> Case:

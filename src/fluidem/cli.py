@@ -37,7 +37,7 @@ def cmd_run(args) -> int:
             from .errors import CaseError
 
             raise CaseError("--resume DIR continues a run as it was set up; give no CASE or --set with it")
-        sim = Simulation.resume(args.resume, progress=not args.quiet)
+        sim = Simulation.resume(args.resume, progress=not args.quiet, threads=args.threads)
         out = Path(args.resume)
     else:
         if not args.case:

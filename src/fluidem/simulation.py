@@ -24,6 +24,7 @@ from .io.restart import RESTART_NAME, load_restart, save_restart
 from .io.snapshots import ParticleWriter
 from .particles.softsphere import SoftSphereEngine
 from .schedule import EveryTime
+from .state import ParticleState
 
 CHUNK_WALL_SECONDS = 0.25  # a compiled chunk should return to Python about this often (Ctrl-C, progress)
 
@@ -72,10 +73,17 @@ class Simulation:
     def __init__(self, case: Case, out_dir: str | Path | None = None, resume: bool = False, progress: bool = False):
         self.case = case
         self.threads = _threads.set_threads(case.threads)
-        self.engine = SoftSphereEngine(case)
-        if not resume:
-            self.engine.check_initial_overlaps()
         self.out_dir = Path(out_dir) if out_dir is not None else None
+        restart = None
+        if resume:
+            if self.out_dir is None or not (self.out_dir / RESTART_NAME).exists():
+                raise CaseError(f"--resume {self.out_dir}: no {RESTART_NAME} there")
+            restart = load_restart(self.out_dir / RESTART_NAME)
+            state = ParticleState(**{k[len("state/"):]: v.copy() for k, v in restart[0].items() if k.startswith("state/")})
+            self.engine = SoftSphereEngine(case, state=state)  # the restart file holds every particle
+        else:
+            self.engine = SoftSphereEngine(case)
+            self.engine.check_initial_overlaps()
         self.observers: dict = {}
         self.progress = Progress(case.output.progress_interval) if progress else None
         self.status = "created"
@@ -85,11 +93,11 @@ class Simulation:
         if self.out_dir is not None:
             self._prepare_run_directory(resume)
             self._default_observers()
-            if resume:
-                self.load_checkpoint(self.out_dir / RESTART_NAME)
+            if restart is not None:
+                self._restore(*restart[:2])
                 for obs in self.observers.values():
                     if hasattr(obs, "truncate_after"):
-                        obs.truncate_after(self.time)
+                        obs.truncate_after(self.step)
 
     # ------------------------------------------------------------ clock
     @property
@@ -112,8 +120,6 @@ class Simulation:
     def _prepare_run_directory(self, resume: bool) -> None:
         out = self.out_dir
         if resume:
-            if not (out / RESTART_NAME).exists():
-                raise CaseError(f"--resume {out}: no {RESTART_NAME} there")
             return
         if out.exists() and not out.is_dir():
             raise CaseError(f"output folder {str(out)!r} is a file")
@@ -282,17 +288,22 @@ class Simulation:
 
     def load_checkpoint(self, path: Path) -> None:
         arrays, scalars, _ = load_restart(path)
+        self._restore(arrays, scalars)
+
+    def _restore(self, arrays, scalars) -> None:
         self.engine.restore(arrays, scalars)
         self.wall_time = float(scalars.get("wall_time", 0.0))
         self.particle_steps = int(scalars.get("particle_steps", 0))
 
     @classmethod
-    def resume(cls, out_dir: str | Path, progress: bool = False) -> "Simulation":
-        """Continue the run in ``out_dir`` from its last checkpoint."""
+    def resume(cls, out_dir: str | Path, progress: bool = False, threads: int | None = None) -> "Simulation":
+        """Continue the run in ``out_dir`` from its last checkpoint (optionally with another thread count)."""
         import tomllib
 
         out_dir = Path(out_dir)
         if not (out_dir / "case.toml").exists():
             raise CaseError(f"--resume {out_dir}: not a run directory (no case.toml)")
         case = validate_case(tomllib.loads((out_dir / "case.toml").read_text()))
+        if threads is not None:
+            case.threads = threads
         return cls(case, out_dir=out_dir, resume=True, progress=progress)

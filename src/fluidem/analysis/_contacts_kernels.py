@@ -3,7 +3,7 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def contact_counts(pos, radius, row_start, partner):
     """(contacts per particle (N,) int64, number of contacts, largest overlap / diameter [-])."""
     n = pos.shape[0]

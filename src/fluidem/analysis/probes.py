@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..particles._softsphere_kernels import wall_contact
+from ..particles._softsphere_kernels import wall_contact, walls_now
 from ._contacts_kernels import contact_counts
 
 
@@ -42,14 +42,15 @@ def wall_positions(engine):
     return point, engine.wall_normal
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _wall_totals(pos, vel, omega, radius, mass, species, pw, motion, point0, normal, wall_hist, t, dt):
     nw = normal.shape[0]
     out = np.zeros((nw, 3))
+    now = walls_now(motion, point0, t)
     for i in range(pos.shape[0]):
         for w in range(nw):
-            ov, fx, fy, fz, _, _, _ = wall_contact(i, w, pos, vel, omega, radius, mass, species, pw, motion,
-                                                   point0, normal, wall_hist, t, dt, False)
+            ov, fx, fy, fz, _, _, _ = wall_contact(i, w, pos, vel, omega, radius, mass, species, pw, now,
+                                                   normal, wall_hist, dt, False)
             if ov > 0.0:
                 out[w, 0] -= fx  # force of the particles on the wall
                 out[w, 1] -= fy

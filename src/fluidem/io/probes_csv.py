@@ -33,7 +33,8 @@ class ProbeWriter:
                 w.writeheader()
             w.writerow({k: (f"{v:.10g}" if isinstance(v, float) else v) for k, v in row.items()})
 
-    def truncate_after(self, time: float) -> None:
+    def truncate_after(self, step: int) -> None:
+        """Drop rows later than ``step`` (on resume; steps are exact where printed times are rounded)."""
         if not self.path.exists():
             return
         with open(self.path, newline="") as f:
@@ -41,7 +42,8 @@ class ProbeWriter:
         if not rows:
             return
         header, body = rows[0], rows[1:]
-        keep = [r for r in body if r and float(r[0]) <= time + 1e-12]
+        col = header.index("step")
+        keep = [r for r in body if r and int(r[col]) <= step]
         with open(self.path, "w", newline="") as f:
             w = csv.writer(f)
             w.writerow(header)

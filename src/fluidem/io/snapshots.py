@@ -53,14 +53,14 @@ class ParticleWriter:
             n = st.n
         write_text_atomic(self.xdmf, xdmf_text(self.path.name, times, n))
 
-    def truncate_after(self, time: float) -> None:
-        """Drop snapshots later than ``time`` (used on resume)."""
+    def truncate_after(self, step: int) -> None:
+        """Drop snapshots later than ``step`` (used on resume)."""
         if not self.path.exists():
             return
         with h5py.File(self.path, "a") as f:
             grp = f.require_group("snapshots")
             for k in list(grp):
-                if float(grp[k].attrs["time"]) > time + 1e-12:
+                if int(grp[k].attrs["step"]) > step:
                     del grp[k]
             times = [(k, float(grp[k].attrs["time"])) for k in sorted(grp)]
             n = grp[times[0][0]]["position"].shape[0] if times else 0

@@ -9,7 +9,7 @@ import numpy as np
 from numba import njit, prange
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _cell_grid(pos, radius, skin, dim2):
     n = pos.shape[0]
     lo = np.empty(3)
@@ -48,7 +48,7 @@ def _cell_grid(pos, radius, skin, dim2):
     return lo, inv, ncell
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _bin(pos, lo, inv, ncell):
     n = pos.shape[0]
     cell = np.empty(n, dtype=np.int64)
@@ -76,7 +76,7 @@ def _bin(pos, lo, inv, ncell):
     return cell, start, members
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", inline="always")
 def _scan_row(i, pos, radius, skin, cell, start, members, ncell, out, write_from):
     """Count (and, if out is not empty, write) the partners j > i of particle i."""
     c = cell[i]
@@ -112,7 +112,7 @@ def _scan_row(i, pos, radius, skin, cell, start, members, ncell, out, write_from
     return count
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, error_model="numpy", parallel=True)
 def build_pairs(pos, radius, skin, dim2):
     """Half neighbour list (CSR) of all pairs closer than a_i + a_j + skin.
 
@@ -150,7 +150,7 @@ def build_pairs(pos, radius, skin, dim2):
     return row_start, partner, trans_start, trans_pair
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, error_model="numpy", parallel=True)
 def carry_history(old_start, old_partner, old_hist, new_start, new_partner):
     """Tangential history of the new list, copied from the old list where a pair persists."""
     n = new_start.shape[0] - 1
@@ -178,7 +178,7 @@ def carry_history(old_start, old_partner, old_hist, new_start, new_partner):
     return hist
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def brute_force_pairs(pos, radius, cutoff_extra):
     """All pairs i < j with |r_ij| < a_i + a_j + cutoff_extra, O(N²) (for tests)."""
     n = pos.shape[0]

@@ -17,7 +17,7 @@ from .contact._dispatch import contact_force
 STATIC, CONSTANT_VELOCITY, OSCILLATING = 0, 1, 2
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", inline="always")
 def wall_state(motion, point0, w, t):
     """Position of the reference point and velocity of wall w at time t."""
     kind = int(motion[w, 0])
@@ -34,7 +34,41 @@ def wall_state(motion, point0, w, t):
     return px, py, pz, 0.0, 0.0, 0.0
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, error_model="numpy", inline="always")
+def _pair(i, j, p, pos, vel, omega, radius, mass, species, pp, hist, dt, update):
+    """(in contact, F on i (3), −n × F_t (3)) of pair (i, j) at list slot p; updates hist[p]."""
+    rx = pos[i, 0] - pos[j, 0]
+    ry = pos[i, 1] - pos[j, 1]
+    rz = pos[i, 2] - pos[j, 2]
+    r2 = rx * rx + ry * ry + rz * rz
+    cut = radius[i] + radius[j]
+    if r2 >= cut * cut:
+        hist[p, 0] = 0.0
+        hist[p, 1] = 0.0
+        hist[p, 2] = 0.0
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    r = math.sqrt(r2)
+    nx = rx / r
+    ny = ry / r
+    nz = rz / r
+    m_eff = mass[i] * mass[j] / (mass[i] + mass[j])
+    r_eff = radius[i] * radius[j] / (radius[i] + radius[j])
+    wx = radius[i] * omega[i, 0] + radius[j] * omega[j, 0]
+    wy = radius[i] * omega[i, 1] + radius[j] * omega[j, 1]
+    wz = radius[i] * omega[i, 2] + radius[j] * omega[j, 2]
+    fn, ftx, fty, ftz, hx, hy, hz = contact_force(
+        pp[species[i], species[j]], cut - r, nx, ny, nz,
+        vel[i, 0] - vel[j, 0], vel[i, 1] - vel[j, 1], vel[i, 2] - vel[j, 2],
+        wx, wy, wz, m_eff, r_eff, dt, hist[p, 0], hist[p, 1], hist[p, 2], update)
+    hist[p, 0] = hx
+    hist[p, 1] = hy
+    hist[p, 2] = hz
+    # torque on i: (−a_i n) × F_t = a_i (−n × F_t); on j: (a_j n) × (−F_t) = a_j (−n × F_t)  (Sun 2007 eq. 24)
+    return (True, fn * nx + ftx, fn * ny + fty, fn * nz + ftz,
+            -(ny * ftz - nz * fty), -(nz * ftx - nx * ftz), -(nx * fty - ny * ftx))
+
+
+@njit(cache=True, error_model="numpy", parallel=True, fastmath=True)
 def pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, hist, dt, update,
                 pair_f, pair_c):
     """Per-pair contact force on i (pair_f) and −n × F_t (pair_c, torque per unit lever arm)."""
@@ -42,52 +76,63 @@ def pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, 
     for i in prange(n):
         for p in range(row_start[i], row_start[i + 1]):
             j = partner[p]
-            rx = pos[i, 0] - pos[j, 0]
-            ry = pos[i, 1] - pos[j, 1]
-            rz = pos[i, 2] - pos[j, 2]
-            r2 = rx * rx + ry * ry + rz * rz
-            cut = radius[i] + radius[j]
-            if r2 >= cut * cut:
-                hist[p, 0] = 0.0
-                hist[p, 1] = 0.0
-                hist[p, 2] = 0.0
-                pair_f[p, 0] = 0.0
-                pair_f[p, 1] = 0.0
-                pair_f[p, 2] = 0.0
-                pair_c[p, 0] = 0.0
-                pair_c[p, 1] = 0.0
-                pair_c[p, 2] = 0.0
-                continue
-            r = math.sqrt(r2)
-            nx = rx / r
-            ny = ry / r
-            nz = rz / r
-            m_eff = mass[i] * mass[j] / (mass[i] + mass[j])
-            r_eff = radius[i] * radius[j] / (radius[i] + radius[j])
-            wx = radius[i] * omega[i, 0] + radius[j] * omega[j, 0]
-            wy = radius[i] * omega[i, 1] + radius[j] * omega[j, 1]
-            wz = radius[i] * omega[i, 2] + radius[j] * omega[j, 2]
-            fn, ftx, fty, ftz, hx, hy, hz = contact_force(
-                pp[species[i], species[j]], cut - r, nx, ny, nz,
-                vel[i, 0] - vel[j, 0], vel[i, 1] - vel[j, 1], vel[i, 2] - vel[j, 2],
-                wx, wy, wz, m_eff, r_eff, dt, hist[p, 0], hist[p, 1], hist[p, 2], update)
-            hist[p, 0] = hx
-            hist[p, 1] = hy
-            hist[p, 2] = hz
-            pair_f[p, 0] = fn * nx + ftx
-            pair_f[p, 1] = fn * ny + fty
-            pair_f[p, 2] = fn * nz + ftz
-            # torque on i: (−a_i n) × F_t = a_i (−n × F_t); on j: (a_j n) × (−F_t) = a_j (−n × F_t)  (Sun 2007 eq. 24)
-            pair_c[p, 0] = -(ny * ftz - nz * fty)
-            pair_c[p, 1] = -(nz * ftx - nx * ftz)
-            pair_c[p, 2] = -(nx * fty - ny * ftx)
+            _, fx, fy, fz, cx, cy, cz = _pair(i, j, p, pos, vel, omega, radius, mass, species, pp, hist, dt, update)
+            pair_f[p, 0] = fx
+            pair_f[p, 1] = fy
+            pair_f[p, 2] = fz
+            pair_c[p, 0] = cx
+            pair_c[p, 1] = cy
+            pair_c[p, 2] = cz
 
 
-@njit(cache=True)
-def wall_contact(i, w, pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
-                 wall_hist, t, dt, update):
+@njit(cache=True, error_model="numpy", fastmath=True)
+def pair_forces_serial(pos, vel, omega, radius, mass, species, pp, row_start, partner, hist, dt, update,
+                       sum_f, sum_c):
+    """One-thread path: pair forces scattered straight into per-particle sums (no pair buffers)."""
+    n = pos.shape[0]
+    sum_f[:, :] = 0.0
+    sum_c[:, :] = 0.0
+    for i in range(n):
+        for p in range(row_start[i], row_start[i + 1]):
+            j = partner[p]
+            touch, fx, fy, fz, cx, cy, cz = _pair(i, j, p, pos, vel, omega, radius, mass, species, pp, hist, dt,
+                                                  update)
+            if touch:
+                sum_f[i, 0] += fx
+                sum_f[i, 1] += fy
+                sum_f[i, 2] += fz
+                sum_f[j, 0] -= fx
+                sum_f[j, 1] -= fy
+                sum_f[j, 2] -= fz
+                sum_c[i, 0] += cx
+                sum_c[i, 1] += cy
+                sum_c[i, 2] += cz
+                sum_c[j, 0] += cx
+                sum_c[j, 1] += cy
+                sum_c[j, 2] += cz
+
+
+@njit(cache=True, error_model="numpy")
+def walls_now(motion, point0, t):
+    """(W, 6) table of each wall's reference point and velocity at time t."""
+    nw = point0.shape[0]
+    out = np.empty((nw, 6))
+    for w in range(nw):
+        px, py, pz, vx, vy, vz = wall_state(motion, point0, w, t)
+        out[w, 0] = px
+        out[w, 1] = py
+        out[w, 2] = pz
+        out[w, 3] = vx
+        out[w, 4] = vy
+        out[w, 5] = vz
+    return out
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def wall_contact(i, w, pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_hist, dt, update):
     """(overlap, fx, fy, fz, tx, ty, tz) of particle i on wall w (a plane; infinite mass)."""
-    px, py, pz, wvx, wvy, wvz = wall_state(wall_motion, wall_point0, w, t)
+    px, py, pz = wall_now[w, 0], wall_now[w, 1], wall_now[w, 2]
+    wvx, wvy, wvz = wall_now[w, 3], wall_now[w, 4], wall_now[w, 5]
     nx, ny, nz = wall_normal[w, 0], wall_normal[w, 1], wall_normal[w, 2]
     gap = (pos[i, 0] - px) * nx + (pos[i, 1] - py) * ny + (pos[i, 2] - pz) * nz
     overlap = radius[i] - gap
@@ -113,13 +158,22 @@ def wall_contact(i, w, pos, vel, omega, radius, mass, species, pw, wall_motion, 
     return overlap, fn * nx + ftx, fn * ny + fty, fn * nz + ftz, tqx, tqy, tqz
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, error_model="numpy", parallel=True)
 def gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
                   wall_hist, gravity, ext_force, dim2, row_start, partner, trans_start, trans_pair,
-                  pair_f, pair_c, t, dt, force, torque):
-    """Total force and torque per particle: contacts (gathered), walls, gravity, external force."""
+                  pair_f, pair_c, summed, t, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2):
+    """Total force and torque per particle: contacts (gathered), walls, gravity, external force.
+
+    ``mode`` fuses the integrator into the same pass (one memory sweep per step):
+    0 forces only (wall history untouched); 1 forces + closing half kick; 2 forces + closing half kick +
+    the next step's half kick and drift. Returns how many particles moved more
+    than sqrt(limit2) from ``ref_pos`` (mode 2), else 0.
+    """
     n = pos.shape[0]
+    half = 0.5 * dt
+    moved = 0
     nw = wall_normal.shape[0]
+    wall_now = walls_now(wall_motion, wall_point0, t)
     for i in prange(n):
         fx = mass[i] * gravity[0] + ext_force[i, 0]
         fy = mass[i] * gravity[1] + ext_force[i, 1]
@@ -127,14 +181,21 @@ def gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_
         cx = 0.0
         cy = 0.0
         cz = 0.0
-        for p in range(row_start[i], row_start[i + 1]):
+        if summed:  # pair_f, pair_c are per-particle sums (one-thread path)
+            fx += pair_f[i, 0]
+            fy += pair_f[i, 1]
+            fz += pair_f[i, 2]
+            cx = pair_c[i, 0]
+            cy = pair_c[i, 1]
+            cz = pair_c[i, 2]
+        for p in range(row_start[i], row_start[i + 1] if not summed else row_start[i]):
             fx += pair_f[p, 0]
             fy += pair_f[p, 1]
             fz += pair_f[p, 2]
             cx += pair_c[p, 0]
             cy += pair_c[p, 1]
             cz += pair_c[p, 2]
-        for q in range(trans_start[i], trans_start[i + 1]):
+        for q in range(trans_start[i], trans_start[i + 1] if not summed else trans_start[i]):
             p = trans_pair[q]
             fx -= pair_f[p, 0]
             fy -= pair_f[p, 1]
@@ -148,8 +209,7 @@ def gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_
         tz = a * cz
         for w in range(nw):
             ov, wfx, wfy, wfz, wtx, wty, wtz = wall_contact(
-                i, w, pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
-                wall_hist, t, dt, True)
+                i, w, pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_hist, dt, mode > 0)
             if ov > 0.0:
                 fx += wfx
                 fy += wfy
@@ -167,25 +227,34 @@ def gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_
         torque[i, 0] = tx
         torque[i, 1] = ty
         torque[i, 2] = tz
+        if mode >= 1:
+            kicks = 2 if mode == 2 else 1
+            for _ in range(kicks):  # the two half kicks stay two additions: bitwise as separate passes
+                for d in range(3):
+                    vel[i, d] += half * force[i, d] * inv_mass[i]
+                    omega[i, d] += half * torque[i, d] * inv_inertia[i]
+            if mode == 2:
+                d2 = 0.0
+                for d in range(3):
+                    pos[i, d] += dt * vel[i, d]
+                    dd = pos[i, d] - ref_pos[i, d]
+                    d2 += dd * dd
+                if d2 > limit2:
+                    moved += 1
+    return moved
 
 
-@njit(cache=True, parallel=True)
-def _kick(vel, omega, force, torque, inv_mass, inv_inertia, half_dt):
-    n = vel.shape[0]
-    for i in prange(n):
-        for d in range(3):
-            vel[i, d] += half_dt * force[i, d] * inv_mass[i]
-            omega[i, d] += half_dt * torque[i, d] * inv_inertia[i]
-
-
-@njit(cache=True, parallel=True)
-def _drift(pos, vel, dt, ref_pos, limit2):
-    """Move particles; return how many moved more than sqrt(limit2) since the last list build."""
+@njit(cache=True, error_model="numpy", parallel=True)
+def _kick_drift(pos, vel, omega, force, torque, inv_mass, inv_inertia, dt, ref_pos, limit2):
+    """Half kick then drift; returns how many particles moved more than sqrt(limit2) since the last build."""
     n = pos.shape[0]
+    half = 0.5 * dt
     moved = 0
     for i in prange(n):
         d2 = 0.0
         for d in range(3):
+            vel[i, d] += half * force[i, d] * inv_mass[i]
+            omega[i, d] += half * torque[i, d] * inv_inertia[i]
             pos[i, d] += dt * vel[i, d]
             dd = pos[i, d] - ref_pos[i, d]
             d2 += dd * dd
@@ -194,7 +263,7 @@ def _drift(pos, vel, dt, ref_pos, limit2):
     return moved
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def rebuild(pos, radius, skin, dim2, row_start, partner, hist, ref_pos):
     """New Verlet list around the current positions, history carried over."""
     new_start, new_partner, trans_start, trans_pair = build_pairs(pos, radius, skin, dim2)
@@ -203,20 +272,21 @@ def rebuild(pos, radius, skin, dim2, row_start, partner, hist, ref_pos):
     return new_start, new_partner, new_hist, trans_start, trans_pair
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def compute_forces(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, wall_point0, wall_normal,
                    wall_hist, gravity, ext_force, dim2, row_start, partner, hist, trans_start, trans_pair,
                    pair_f, pair_c, t, dt, update, force, torque):
+    """Forces and torques at the current state (no integration)."""
     pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, hist, dt, update, pair_f, pair_c)
     gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
                   wall_hist, gravity, ext_force, dim2, row_start, partner, trans_start, trans_pair,
-                  pair_f, pair_c, t, dt, force, torque)
+                  pair_f, pair_c, False, t, dt, force, torque, mass, mass, 0, pos, 0.0)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia, species, pp, pw,
             wall_motion, wall_point0, wall_normal, wall_hist, gravity, ext_force, dim2,
-            row_start, partner, hist, trans_start, trans_pair, ref_pos, skin, step0, dt, nsteps):
+            row_start, partner, hist, trans_start, trans_pair, ref_pos, skin, step0, dt, nsteps, serial):
     """Run ``nsteps`` velocity-Verlet DEM steps from step ``step0`` (time step0 * dt).
 
     Order of one step::
@@ -227,27 +297,38 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
         F, T at the new positions             (eqs 17-24; walls; gravity; external force)
         v += F/m dt/2, ω += T/I dt/2          (half kick)
 
+    The closing half kick of one step, the opening half kick and the drift of the
+    next are fused into the force-gathering pass; results are bitwise those of the
+    separate passes, so chunking a run differently does not change it.
+    With ``serial`` (one thread) pair forces are scattered straight into
+    per-particle sums; otherwise they go through per-pair buffers gathered per
+    particle, which keeps the sums race-free and independent of the thread count.
     The list arrays change size on rebuild, so they are returned with the rebuild count.
     """
-    half = 0.5 * dt
     limit2 = (0.5 * skin) ** 2
-    npairs = partner.shape[0]
-    pair_f = np.zeros((npairs, 3))
-    pair_c = np.zeros((npairs, 3))
+    nbuf = pos.shape[0] if serial else partner.shape[0]
+    pair_f = np.zeros((nbuf, 3))
+    pair_c = np.zeros((nbuf, 3))
     rebuilds = 0
+    if nsteps <= 0:
+        return row_start, partner, hist, trans_start, trans_pair, rebuilds
+    moved = _kick_drift(pos, vel, omega, force, torque, inv_mass, inv_inertia, dt, ref_pos, limit2)
     for s in range(nsteps):
         t = (step0 + s + 1) * dt
-        _kick(vel, omega, force, torque, inv_mass, inv_inertia, half)
-        moved = _drift(pos, vel, dt, ref_pos, limit2)
         if moved > 0:
             row_start, partner, hist, trans_start, trans_pair = rebuild(
                 pos, radius, skin, dim2, row_start, partner, hist, ref_pos)
             rebuilds += 1
-            if partner.shape[0] != pair_f.shape[0]:
+            if not serial and partner.shape[0] != pair_f.shape[0]:
                 pair_f = np.zeros((partner.shape[0], 3))
                 pair_c = np.zeros((partner.shape[0], 3))
-        compute_forces(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, wall_point0, wall_normal,
-                       wall_hist, gravity, ext_force, dim2, row_start, partner, hist, trans_start, trans_pair,
-                       pair_f, pair_c, t, dt, True, force, torque)
-        _kick(vel, omega, force, torque, inv_mass, inv_inertia, half)
+        if serial:
+            pair_forces_serial(pos, vel, omega, radius, mass, species, pp, row_start, partner, hist, dt, True,
+                               pair_f, pair_c)
+        else:
+            pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, hist, dt, True, pair_f, pair_c)
+        mode = 2 if s < nsteps - 1 else 1
+        moved = gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
+                              wall_hist, gravity, ext_force, dim2, row_start, partner, trans_start, trans_pair,
+                              pair_f, pair_c, serial, t, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2)
     return row_start, partner, hist, trans_start, trans_pair, rebuilds

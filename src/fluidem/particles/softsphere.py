@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 
 from ..errors import CaseError
@@ -128,7 +129,7 @@ class SoftSphereEngine:
             if bad.size:
                 k = bad[np.argmax(ov[bad])]
                 raise CaseError(
-                    f"initial particles overlap: {bad.size} pair(s), e.g. particles {i[k]} and {partner[k]} by "
+                    f"particles.placement: initial particles overlap: {bad.size} pair(s), e.g. particles {i[k]} and {partner[k]} by "
                     f"{ov[k]:.3g} m; particles must start apart"
                 )
         for w, plane in enumerate(self.walls.planes):
@@ -136,7 +137,7 @@ class SoftSphereEngine:
             bad = np.flatnonzero(gap < -tolerance * st.radius)
             if bad.size:
                 raise CaseError(
-                    f"initial particles cross wall {plane.name}: {bad.size} particle(s), e.g. particle {bad[0]} "
+                    f"particles.placement: initial particles cross wall {plane.name}: {bad.size} particle(s), e.g. particle {bad[0]} "
                     f"by {-gap[bad[0]]:.3g} m"
                 )
 
@@ -159,7 +160,8 @@ class SoftSphereEngine:
             st.position, st.velocity, st.omega, st.force, st.torque, st.radius, st.mass, self.inv_mass,
             self.inv_inertia, st.species, self.pp, self.pw, self.wall_motion, self.wall_point0, self.wall_normal,
             self.wall_hist, self.gravity, self.ext_force, self.dim2, self.row_start, self.partner, self.hist,
-            self.trans_start, self.trans_pair, self.ref_pos, self.skin, self.steps, self.dt, nsteps)
+            self.trans_start, self.trans_pair, self.ref_pos, self.skin, self.steps, self.dt, nsteps,
+            numba.get_num_threads() == 1)
         self.steps += nsteps
         self.time = self.steps * self.dt
         self.rebuilds += nreb

@@ -12,7 +12,7 @@ from numba import njit
 from . import hertz_mindlin, spring_dashpot
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", inline="always")
 def coefficients(p, overlap, m_eff, r_eff):
     """(elastic normal force [N], η_n [N s/m], k_t [N/m], η_t [N s/m]) of the model coded in p[0]."""
     code = int(p[0])
@@ -23,7 +23,7 @@ def coefficients(p, overlap, m_eff, r_eff):
     return 0.0, 0.0, 0.0, 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", inline="always")
 def contact_force(p, overlap, nx, ny, nz, vx, vy, vz, wx, wy, wz, m_eff, r_eff, dt, hx, hy, hz, update):
     """Force on body i of a contact, and the updated tangential history.
 

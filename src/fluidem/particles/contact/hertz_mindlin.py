@@ -111,7 +111,7 @@ class HertzMindlin(ContactModel):
         return contact_time_hertz(m_eff, r_eff, e_star, impact_velocity, self.restitution)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", inline="always")
 def coefficients(p, overlap, m_eff, r_eff):
     """(elastic normal force [N], η_n [N s/m], k_t [N/m], η_t [N s/m]) of the Hertz–Mindlin law above."""
     k_h = 4.0 / 3.0 * p[1] * math.sqrt(r_eff)

@@ -76,7 +76,7 @@ class LinearSpringDashpot(ContactModel):
         return math.exp(-eta / m_eff * tc / 2.0) if math.isfinite(tc) else 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", inline="always")
 def coefficients(p, overlap, m_eff, r_eff):
     """(elastic normal force [N], η_n [N s/m], k_t [N/m], η_t [N s/m]) for a linear contact (Sun 2007 eq. 21–22)."""
     kn = p[1]

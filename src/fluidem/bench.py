@@ -1,0 +1,159 @@
+"""``fluidem bench``: throughput on standard problems, printed as a table.
+
+Problems
+--------
+dense bed   The peer benchmark of shared/PEERS.md: monodisperse spheres d = 4 mm,
+            ρ = 2700 kg/m³, Hertz–Mindlin with tangential history (E = 5 MPa, ν = 0.3,
+            e = 0.9, μ = 0.3 for particles and walls), dt = 1e-5 s, skin 1 mm, in a
+            closed box, loaded settled and at rest. The settled beds are made once by
+            this engine (lattice → settle → quench) and cached.
+pour        The built-in 2D ``pour`` case (500 particles), stepping from its start.
+
+Only the stepping loop is timed. Results are particle-steps per second.
+"""
+from __future__ import annotations
+
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+DIAMETER = 4e-3
+DENSITY = 2700.0
+DT = 1e-5
+SKIN = 1e-3
+
+
+def cache_dir() -> Path:
+    d = Path(os.environ.get("FLUIDEM_CACHE", Path.home() / ".cache" / "fluidem")) / "bench"
+    d.mkdir(parents=True, exist_ok=True)
+    return d
+
+
+def box_side(n: int) -> float:
+    """Box width [m]: 0.08 m for 10,000 spheres (PEERS.md), area scaled to keep beds about 9–15 cm high."""
+    if n <= 10000:
+        return 0.08 * (n / 10000) ** (1 / 3)
+    return 0.08 * (n / 10000) ** 0.4
+
+
+def bed_case(n: int, side: float, height: float, restitution: float = 0.9, placement=None):
+    from .case import validate_case
+
+    data = {
+        "name": f"dense-bed-{n}",
+        "description": "PEERS.md dense-bed benchmark",
+        "particles": {
+            "dimensions": 3,
+            "species": [{"name": "glass", "diameter": DIAMETER, "density": DENSITY, "count": n}],
+            "contact": {"model": "hertz_mindlin", "youngs_modulus": 5e6, "poisson_ratio": 0.3,
+                        "restitution": restitution, "friction": 0.3},
+            "placement": placement or {"method": "lattice", "spacing": 1.1, "perturbation": 0.02,
+                                       "region_lower": [0.0, 0.0, 0.0], "region_upper": [side, side, height]},
+        },
+        "walls": [{"name": "box", "kind": "box", "lower": [0.0, 0.0, 0.0], "upper": [side, side, height]}],
+        "time": {"end": 1.0, "dt": DT},
+        "neighbours": {"skin": SKIN},
+    }
+    return validate_case(data)
+
+
+def settled_bed(n: int, verbose: bool = True) -> Path:
+    """Path of the cached settled bed of n spheres (npz: position, diameter, box_lower, box_upper)."""
+    path = cache_dir() / f"bed_{n}.npz"
+    if path.exists():
+        return path
+    from .particles.softsphere import SoftSphereEngine
+
+    side = box_side(n)
+    per_layer = int(side / (1.1 * DIAMETER)) ** 2
+    height = (n / per_layer + 2) * 1.1 * DIAMETER
+    case = bed_case(n, side, height, restitution=0.3)
+    eng = SoftSphereEngine(case)
+    if verbose:
+        print(f"fluidem bench: settling a bed of {n} spheres once (cached in {path}) ...", file=sys.stderr, flush=True)
+    t0 = time.perf_counter()
+    # settle: fall and damp; quench velocities every 0.02 s after the collapse
+    for k in range(40):
+        eng.advance(2000)
+        if k >= 10:
+            eng.state.velocity[:] = 0.0
+            eng.state.omega[:] = 0.0
+        ke = 0.5 * np.sum(eng.state.mass[:, None] * eng.state.velocity**2)
+        if verbose:
+            print(f"  t = {eng.time:.2f} s  kinetic energy {ke:.3e} J  ({time.perf_counter() - t0:.0f} s)",
+                  file=sys.stderr, flush=True)
+        if k >= 20 and ke < 1e-9 * n:
+            break
+    st = eng.state
+    top = float(np.max(st.position[:, 2] + st.radius))
+    np.savez(path, position=st.position, diameter=2 * st.radius, box_lower=np.zeros(3),
+             box_upper=np.array([side, side, top + 2 * DIAMETER]))
+    return path
+
+
+def load_bed_engine(n: int):
+    from .particles.softsphere import SoftSphereEngine
+    from .state import ParticleState
+
+    bed = np.load(settled_bed(n))
+    lo, hi = bed["box_lower"], bed["box_upper"]
+    case = bed_case(n, float(hi[0] - lo[0]), float(hi[2] - lo[2]))
+    st = ParticleState.create(bed["position"], np.zeros_like(bed["position"]), bed["diameter"],
+                              np.zeros(n, np.int64), np.array([DENSITY]))
+    return SoftSphereEngine(case, state=st)
+
+
+def time_engine(eng, steps: int, target_seconds: float = 5.0) -> tuple[int, float]:
+    eng.advance(20)  # compile / warm caches
+    if steps <= 0:
+        t0 = time.perf_counter()
+        eng.advance(50)
+        per = (time.perf_counter() - t0) / 50
+        steps = max(50, int(target_seconds / max(per, 1e-9)))
+    t0 = time.perf_counter()
+    eng.advance(steps)
+    return steps, time.perf_counter() - t0
+
+
+def run_bench(sizes="10000,100000", threads="1,2", steps: int = 0, as_json: str | None = None) -> list[dict]:
+    import numba
+
+    from .analysis.probes import contacts
+    from .case import load_case
+    from .particles.softsphere import SoftSphereEngine
+
+    sizes = [int(s) for s in str(sizes).split(",") if s]
+    threads = [int(t) for t in str(threads).split(",") if t]
+    rows = []
+    for n in sizes:
+        for t in threads:
+            numba.set_num_threads(min(t, numba.config.NUMBA_NUM_THREADS))
+            eng = load_bed_engine(n)
+            nsteps, wall = time_engine(eng, steps)
+            c = contacts(eng)
+            rows.append({"problem": "dense bed 3D hertz", "n_particles": n, "threads": t, "steps": nsteps,
+                         "wall_s": wall, "particle_steps_per_s": n * nsteps / wall,
+                         "contacts_per_particle": c["coordination"]})
+            _print_row(rows[-1], header=len(rows) == 1)
+    for t in threads:
+        numba.set_num_threads(min(t, numba.config.NUMBA_NUM_THREADS))
+        eng = SoftSphereEngine(load_case("pour"))
+        nsteps, wall = time_engine(eng, steps, 3.0)
+        rows.append({"problem": "pour 2D linear", "n_particles": eng.state.n, "threads": t, "steps": nsteps,
+                     "wall_s": wall, "particle_steps_per_s": eng.state.n * nsteps / wall,
+                     "contacts_per_particle": contacts(eng)["coordination"]})
+        _print_row(rows[-1], header=not rows[:-1])
+    if as_json:
+        Path(as_json).write_text(json.dumps(rows, indent=2) + "\n")
+    return rows
+
+
+def _print_row(r: dict, header: bool) -> None:
+    if header:
+        print(f"{'problem':22s} {'N':>8s} {'threads':>7s} {'steps':>7s} {'wall s':>8s} {'particle-steps/s':>17s} {'contacts/particle':>18s}")
+    print(f"{r['problem']:22s} {r['n_particles']:8d} {r['threads']:7d} {r['steps']:7d} {r['wall_s']:8.2f} "
+          f"{r['particle_steps_per_s']:17.3e} {r['contacts_per_particle']:18.2f}", flush=True)

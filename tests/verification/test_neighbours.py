@@ -1,0 +1,115 @@
+"""Cell-list + Verlet-list pairs against the O(N²) brute force, compared as exact sets.
+
+``build_pairs`` must return every pair i < j with |r_i − r_j| < a_i + a_j + skin and no
+other (both sides evaluate the same floating-point expression, so equality is exact).
+``build_pairs`` fills its rows in parallel (a count pass, then a write pass), so it is
+tested with every thread (``all_threads``).
+The engine's list, rebuilt when a particle has moved more than skin/2, must always hold
+every pair in contact.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from fluidem.particles._neighbours_kernels import brute_force_pairs, build_pairs
+
+
+def csr_pairs(row_start, partner):
+    rows = np.repeat(np.arange(row_start.shape[0] - 1), np.diff(row_start))
+    return set(zip(rows.tolist(), partner.tolist()))
+
+
+def brute_pairs(pos, radius, skin):
+    return {(int(i), int(j)) for i, j in brute_force_pairs(pos, radius, skin)}
+
+
+def random_packing(seed, n, dim2, solid_fraction=0.3, spread=(0.5, 1.5)):
+    """Random (overlapping allowed) polydisperse positions at a given nominal solid fraction.
+
+    Radii are uniform in spread × 1 mm; the box side is chosen for the solid fraction.
+    """
+    rng = np.random.default_rng(seed)
+    radius = 1e-3 * rng.uniform(*spread, n)
+    if dim2:
+        side = np.sqrt(np.sum(np.pi * radius**2) / solid_fraction)
+        pos = np.column_stack([rng.uniform(0, side, (n, 2)), np.full(n, 0.25e-3)])  # one z, as 2D cases have
+    else:
+        side = np.cbrt(np.sum(4 / 3 * np.pi * radius**3) / solid_fraction)
+        pos = rng.uniform(0, side, (n, 3)) - 0.3 * side  # a box not at the origin
+    return pos, radius
+
+
+def check_lists(pos, radius, skin, dim2):
+    row_start, partner, trans_start, trans_pair = build_pairs(pos, radius, skin, dim2)
+    n = pos.shape[0]
+    assert row_start.shape == (n + 1,) and row_start[0] == 0 and row_start[-1] == partner.shape[0]
+    fast = csr_pairs(row_start, partner)
+    assert len(fast) == partner.shape[0], "a pair is listed twice"
+    expected = brute_pairs(pos, radius, skin)
+    assert fast == expected, (f"missing {sorted(expected - fast)[:5]}, extra {sorted(fast - expected)[:5]} "
+                              f"of {len(expected)} pairs")
+    rows = np.repeat(np.arange(n), np.diff(row_start))
+    assert np.all(partner > rows), "half list must hold j > i only"
+    # rows sorted (history carry-over relies on it)
+    for i in range(n):
+        assert np.all(np.diff(partner[row_start[i]:row_start[i + 1]]) > 0)
+    # transposed index: trans_pair of particle k lists exactly the pairs whose partner is k
+    assert trans_start[-1] == partner.shape[0]
+    for k in range(n):
+        ps = trans_pair[trans_start[k]:trans_start[k + 1]]
+        assert np.all(partner[ps] == k)
+    assert np.array_equal(np.sort(trans_pair), np.arange(partner.shape[0]))
+    return len(expected)
+
+
+@pytest.mark.parametrize("dim2", [False, True], ids=["3d", "2d"])
+@pytest.mark.parametrize("seed", [1, 2, 3])
+@pytest.mark.parametrize("skin_in_radii", [0.0, 0.1, 0.5, 2.0])
+def test_cell_list_equals_brute_force(all_threads, seed, dim2, skin_in_radii):
+    pos, radius = random_packing(seed, 600, dim2)
+    npairs = check_lists(pos, radius, skin_in_radii * 1e-3, dim2)
+    assert npairs > 200  # the packing is dense enough for the comparison to mean something
+
+
+@pytest.mark.parametrize("dim2", [False, True], ids=["3d", "2d"])
+def test_cell_list_with_a_stray_particle(all_threads, dim2):
+    """A particle far away makes the cell grid grow coarser; pairs must not change."""
+    pos, radius = random_packing(4, 400, dim2)
+    pos = np.vstack([pos, [[1.0, -2.0, pos[0, 2]]] if dim2 else [[1.0, -2.0, 3.0]]])
+    radius = np.append(radius, 1e-3)
+    assert check_lists(pos, radius, 0.2e-3, dim2) > 150
+
+
+def test_cell_list_degenerate_layouts():
+    """All particles on a line (zero extent in two axes), coincident particles, one particle."""
+    n = 40
+    line = np.column_stack([np.linspace(0.0, 0.05, n), np.zeros(n), np.zeros(n)])
+    check_lists(line, np.full(n, 0.7e-3), 0.1e-3, False)
+    check_lists(np.zeros((5, 3)), np.full(5, 1e-3), 0.0, False)
+    check_lists(np.zeros((1, 3)), np.full(1, 1e-3), 0.1e-3, False)
+
+
+@pytest.mark.parametrize("dimensions", [3, 2])
+def test_engine_list_always_holds_the_contacts(make_engine, contact_law, dimensions):
+    """During a run the Verlet list (rebuilt at skin/2 displacement) contains every touching pair."""
+    rng = np.random.default_rng(11)
+    n = 150
+    pos, radius = random_packing(5, n, dimensions == 2, solid_fraction=0.15)
+    # make the start non-overlapping: shrink radii to half the nearest distance where needed
+    d = np.linalg.norm(pos[:, None, :] - pos[None, :, :], axis=2) + np.eye(n)
+    radius = np.minimum(radius, 0.49 * d.min(axis=1))
+    vel = rng.normal(0.0, 0.5, (n, 3))
+    if dimensions == 2:
+        vel[:, 2] = 0.0
+    eng = make_engine(pos, 2 * radius, vel, contact=contact_law("linear_spring_dashpot", restitution=0.8),
+                      dimensions=dimensions, skin=0.2e-3)
+    checked = 0
+    for _ in range(300):
+        eng.advance(20)
+        st = eng.state
+        touching = brute_pairs(st.position, st.radius, 0.0)
+        listed = csr_pairs(eng.row_start, eng.partner)
+        assert touching <= listed, f"pairs in contact but not listed: {sorted(touching - listed)[:5]}"
+        checked += len(touching)
+    assert eng.rebuilds > 10 and checked > 100  # the list was rebuilt often and contacts occurred

@@ -157,7 +157,8 @@ def two_particles(make_engine):
     def _make(overlap=0.0, model="linear_spring_dashpot", diameters=(DIAMETER, DIAMETER), vel=None, omega=None,
               dimensions=3, dt=None, **law):
         d0, d1 = diameters
-        pos = np.array([[0.0, 0.0, 0.0], [0.5 * (d0 + d1) - overlap, 0.0, 0.0]])
+        # 0.5 d0 + 0.5 d1 is exactly the engine's a_0 + a_1, so overlap=0 means touching to the last bit
+        pos = np.array([[0.0, 0.0, 0.0], [(0.5 * d0 + 0.5 * d1) - overlap, 0.0, 0.0]])
         return make_engine(pos, np.array([d0, d1]), vel, omega=omega, contact=law_dict(model, **law),
                            dimensions=dimensions, dt=dt)
 

@@ -5,7 +5,7 @@ OpenMP on 2 cores, so OpenMP is preferred unless the user set a layer.
 """
 import os
 
-os.environ.setdefault("NUMBA_THREADING_LAYER_PRIORITY", "omp workqueue tbb")
+
 
 
 def set_threads(n: int | None) -> int:

@@ -1,9 +1,13 @@
 """Compiled cell-list + Verlet-list construction with tangential-history carry-over.
 
-Pairs are stored as a half list in CSR form: row i holds the j > i with
-|r_i − r_j| < a_i + a_j + skin. A transposed index (rows by j) lets forces be
-gathered per particle without write conflicts, so every particle's sum has a
-fixed order: results do not depend on the number of threads.
+Pairs closer than a_i + a_j + skin are stored once (a half list, CSR by owner).
+The domain is cut into slabs at least one cut-off wide along its longest axis;
+a pair belongs to the particle in the lower slab (the lower index within a
+slab), so the pairs of slab s touch only particles of slabs s and s + 1. Force
+loops then run the even slabs in parallel, then the odd ones, adding straight
+into per-particle sums without races. The slab partition depends on geometry
+only, so sums have the same order for any thread count: results are bitwise
+independent of the number of threads.
 """
 import numpy as np
 from numba import njit, prange
@@ -77,8 +81,8 @@ def _bin(pos, lo, inv, ncell):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _scan_row(i, pos, radius, skin, cell, start, members, ncell, out, write_from):
-    """Count (and, if out is not empty, write) the partners j > i of particle i."""
+def _scan_row(i, pos, radius, skin, cell, start, members, ncell, slab, out, write_from):
+    """Count (and, if out is not empty, write) the partners j owned by particle i."""
     c = cell[i]
     cz = c % ncell[2]
     cy = (c // ncell[2]) % ncell[1]
@@ -99,7 +103,7 @@ def _scan_row(i, pos, radius, skin, cell, start, members, ncell, out, write_from
                 cc = (x * ncell[1] + y) * ncell[2] + z
                 for m in range(start[cc], start[cc + 1]):
                     j = members[m]
-                    if j <= i:
+                    if slab[j] < slab[i] or (slab[j] == slab[i] and j <= i):
                         continue
                     rx = pos[i, 0] - pos[j, 0]
                     ry = pos[i, 1] - pos[j, 1]
@@ -112,69 +116,109 @@ def _scan_row(i, pos, radius, skin, cell, start, members, ncell, out, write_from
     return count
 
 
+@njit(cache=True, error_model="numpy")
+def _slabs(pos, radius, skin, dim2, max_slabs):
+    """Slab index of each particle and CSR of slab members (slabs >= one cut-off wide)."""
+    n = pos.shape[0]
+    axis = 0
+    best = -1.0
+    for d in range(2 if dim2 else 3):
+        lo = np.inf
+        hi = -np.inf
+        for i in range(n):
+            lo = min(lo, pos[i, d])
+            hi = max(hi, pos[i, d])
+        if hi - lo > best:
+            best = hi - lo
+            axis = d
+    lo = np.inf
+    rmax = 0.0
+    for i in range(n):
+        lo = min(lo, pos[i, axis])
+        rmax = max(rmax, radius[i])
+    cut = 2.0 * rmax + skin
+    nslab = max(1, min(max_slabs, int(best / cut))) if n > 0 else 1
+    width = best / nslab if best > 0 else 1.0
+    slab = np.empty(n, dtype=np.int64)
+    start = np.zeros(nslab + 1, dtype=np.int64)
+    for i in range(n):
+        k = min(nslab - 1, int((pos[i, axis] - lo) / width))
+        slab[i] = k
+        start[k + 1] += 1
+    for k in range(nslab):
+        start[k + 1] += start[k]
+    fill = start[:-1].copy()
+    members = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        members[fill[slab[i]]] = i
+        fill[slab[i]] += 1
+    return slab, start, members
+
+
 @njit(cache=True, error_model="numpy", parallel=True)
 def build_pairs(pos, radius, skin, dim2):
-    """Half neighbour list (CSR) of all pairs closer than a_i + a_j + skin.
+    """Half neighbour list (CSR by owner) of all pairs closer than a_i + a_j + skin.
 
-    Returns (row_start (N+1,), partner (P,), trans_start (N+1,), trans_pair (P,)),
-    where trans_pair lists, for each particle k, the pair indices whose partner is k.
+    Returns (row_start (N+1,), partner (P,), slab_start (S+1,), slab_members (N,)).
     """
     n = pos.shape[0]
+    slab, slab_start, slab_members = _slabs(pos, radius, skin, dim2, 64)
     lo, inv, ncell = _cell_grid(pos, radius, skin, dim2)
     cell, start, members = _bin(pos, lo, inv, ncell)
     counts = np.zeros(n + 1, dtype=np.int64)
     empty = np.empty(0, dtype=np.int64)
     for i in prange(n):
-        counts[i + 1] = _scan_row(i, pos, radius, skin, cell, start, members, ncell, empty, 0)
+        counts[i + 1] = _scan_row(i, pos, radius, skin, cell, start, members, ncell, slab, empty, 0)
     for i in range(n):
         counts[i + 1] += counts[i]
     row_start = counts
     partner = np.empty(row_start[n], dtype=np.int64)
     for i in prange(n):
-        _scan_row(i, pos, radius, skin, cell, start, members, ncell, partner, row_start[i])
+        _scan_row(i, pos, radius, skin, cell, start, members, ncell, slab, partner, row_start[i])
     # sort each row so that lookups are deterministic and cache-friendly
     for i in prange(n):
         partner[row_start[i]:row_start[i + 1]].sort()
-    trans_start = np.zeros(n + 1, dtype=np.int64)
-    for p in range(partner.shape[0]):
-        trans_start[partner[p] + 1] += 1
-    for i in range(n):
-        trans_start[i + 1] += trans_start[i]
-    trans_pair = np.empty(partner.shape[0], dtype=np.int64)
-    fill = trans_start[:-1].copy()
-    for i in range(n):
-        for p in range(row_start[i], row_start[i + 1]):
-            j = partner[p]
-            trans_pair[fill[j]] = p
-            fill[j] += 1
-    return row_start, partner, trans_start, trans_pair
+    return row_start, partner, slab_start, slab_members
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _find(start, partner, i, j):
+    """Slot of partner j in the sorted row i, or −1."""
+    lo = start[i]
+    b = start[i + 1]
+    hi = b
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if partner[mid] < j:
+            lo = mid + 1
+        else:
+            hi = mid
+    if lo < b and partner[lo] == j:
+        return lo
+    return -1
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
 def carry_history(old_start, old_partner, old_hist, new_start, new_partner):
-    """Tangential history of the new list, copied from the old list where a pair persists."""
+    """Tangential history of the new list, copied from the old list where a pair persists.
+
+    A pair whose owner changed (a particle crossed a slab boundary) is found in the
+    old row of its partner; its history, kept relative to the owner, changes sign.
+    """
     n = new_start.shape[0] - 1
     hist = np.zeros((new_partner.shape[0], 3))
     for i in prange(n):
-        a = old_start[i]
-        b = old_start[i + 1]
-        if a == b:
-            continue
         for p in range(new_start[i], new_start[i + 1]):
             j = new_partner[p]
-            # rows are sorted: binary search
-            lo = a
-            hi = b
-            while lo < hi:
-                mid = (lo + hi) // 2
-                if old_partner[mid] < j:
-                    lo = mid + 1
-                else:
-                    hi = mid
-            if lo < b and old_partner[lo] == j:
-                hist[p, 0] = old_hist[lo, 0]
-                hist[p, 1] = old_hist[lo, 1]
-                hist[p, 2] = old_hist[lo, 2]
+            q = _find(old_start, old_partner, i, j)
+            sign = 1.0
+            if q < 0:
+                q = _find(old_start, old_partner, j, i)
+                sign = -1.0
+            if q >= 0:
+                hist[p, 0] = sign * old_hist[q, 0]
+                hist[p, 1] = sign * old_hist[q, 1]
+                hist[p, 2] = sign * old_hist[q, 2]
     return hist
 
 

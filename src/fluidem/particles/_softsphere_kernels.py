@@ -1,9 +1,10 @@
 """Compiled soft-sphere DEM: forces and velocity-Verlet sub-steps (Sun 2007 eqs 15–24).
 
 ``advance`` runs many DEM steps in one call: half kick, drift, Verlet-list check
-and rebuild, forces, half kick. Pair forces are computed once per pair into
-per-pair buffers and gathered per particle (no write races, thread-count
-independent sums).
+and rebuild, forces, half kick. Pair forces are computed once per pair and added
+straight into per-particle sums, slab by slab in two phases (see
+``_neighbours_kernels``), so there are no write races and the sums do not depend
+on the number of threads.
 """
 import math
 
@@ -48,9 +49,10 @@ def _pair(i, j, p, pos, vel, omega, radius, mass, species, pp, hist, dt, update)
         hist[p, 2] = 0.0
         return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     r = math.sqrt(r2)
-    nx = rx / r
-    ny = ry / r
-    nz = rz / r
+    inv_r = 1.0 / r
+    nx = rx * inv_r
+    ny = ry * inv_r
+    nz = rz * inv_r
     m_eff = mass[i] * mass[j] / (mass[i] + mass[j])
     r_eff = radius[i] * radius[j] / (radius[i] + radius[j])
     wx = radius[i] * omega[i, 0] + radius[j] * omega[j, 0]
@@ -68,31 +70,13 @@ def _pair(i, j, p, pos, vel, omega, radius, mass, species, pp, hist, dt, update)
             -(ny * ftz - nz * fty), -(nz * ftx - nx * ftz), -(nx * fty - ny * ftx))
 
 
-@njit(cache=True, error_model="numpy", parallel=True, fastmath=True)
-def pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, hist, dt, update,
-                pair_f, pair_c):
-    """Per-pair contact force on i (pair_f) and −n × F_t (pair_c, torque per unit lever arm)."""
-    n = pos.shape[0]
-    for i in prange(n):
-        for p in range(row_start[i], row_start[i + 1]):
-            j = partner[p]
-            _, fx, fy, fz, cx, cy, cz = _pair(i, j, p, pos, vel, omega, radius, mass, species, pp, hist, dt, update)
-            pair_f[p, 0] = fx
-            pair_f[p, 1] = fy
-            pair_f[p, 2] = fz
-            pair_c[p, 0] = cx
-            pair_c[p, 1] = cy
-            pair_c[p, 2] = cz
-
-
 @njit(cache=True, error_model="numpy", fastmath=True)
-def pair_forces_serial(pos, vel, omega, radius, mass, species, pp, row_start, partner, hist, dt, update,
-                       sum_f, sum_c):
-    """One-thread path: pair forces scattered straight into per-particle sums (no pair buffers)."""
-    n = pos.shape[0]
-    sum_f[:, :] = 0.0
-    sum_c[:, :] = 0.0
-    for i in range(n):
+def _slab_pairs(s, pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
+                dt, update, sum_f, sum_c):
+    """Pairs owned by the particles of slab s, added into the sums (compiled outside the parallel loop,
+    which lets LLVM optimise it as plain serial code: about 1.5x faster than the same body inside prange)."""
+    for m in range(slab_start[s], slab_start[s + 1]):
+        i = slab_members[m]
         for p in range(row_start[i], row_start[i + 1]):
             j = partner[p]
             touch, fx, fy, fz, cx, cy, cz = _pair(i, j, p, pos, vel, omega, radius, mass, species, pp, hist, dt,
@@ -110,6 +94,25 @@ def pair_forces_serial(pos, vel, omega, radius, mass, species, pp, row_start, pa
                 sum_c[j, 0] += cx
                 sum_c[j, 1] += cy
                 sum_c[j, 2] += cz
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
+                dt, update, sum_f, sum_c):
+    """Contact force sums (sum_f, N) and Σ −n × F_t (sum_c, torque per unit lever arm) per particle.
+
+    Slabs of one parity run in parallel: the pairs of slab s touch only slabs s and s + 1.
+    """
+    nslab = slab_start.shape[0] - 1
+    n = sum_f.shape[0]
+    for i in prange(n):
+        for d in range(3):
+            sum_f[i, d] = 0.0
+            sum_c[i, d] = 0.0
+    for phase in range(2):
+        for h in prange((nslab - phase + 1) // 2):
+            _slab_pairs(2 * h + phase, pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start,
+                        slab_members, hist, dt, update, sum_f, sum_c)
 
 
 @njit(cache=True, error_model="numpy")
@@ -160,9 +163,9 @@ def wall_contact(i, w, pos, vel, omega, radius, mass, species, pw, wall_now, wal
 
 @njit(cache=True, error_model="numpy", parallel=True)
 def gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
-                  wall_hist, gravity, ext_force, dim2, row_start, partner, trans_start, trans_pair,
-                  pair_f, pair_c, summed, t, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2):
-    """Total force and torque per particle: contacts (gathered), walls, gravity, external force.
+                  wall_hist, gravity, ext_force, dim2, sum_f, sum_c, t, dt, force, torque, inv_mass, inv_inertia,
+                  mode, ref_pos, limit2):
+    """Total force and torque per particle: contact sums, walls, gravity, external force.
 
     ``mode`` fuses the integrator into the same pass (one memory sweep per step):
     0 forces only (wall history untouched); 1 forces + closing half kick; 2 forces + closing half kick +
@@ -178,31 +181,12 @@ def gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_
         fx = mass[i] * gravity[0] + ext_force[i, 0]
         fy = mass[i] * gravity[1] + ext_force[i, 1]
         fz = mass[i] * gravity[2] + ext_force[i, 2]
-        cx = 0.0
-        cy = 0.0
-        cz = 0.0
-        if summed:  # pair_f, pair_c are per-particle sums (one-thread path)
-            fx += pair_f[i, 0]
-            fy += pair_f[i, 1]
-            fz += pair_f[i, 2]
-            cx = pair_c[i, 0]
-            cy = pair_c[i, 1]
-            cz = pair_c[i, 2]
-        for p in range(row_start[i], row_start[i + 1] if not summed else row_start[i]):
-            fx += pair_f[p, 0]
-            fy += pair_f[p, 1]
-            fz += pair_f[p, 2]
-            cx += pair_c[p, 0]
-            cy += pair_c[p, 1]
-            cz += pair_c[p, 2]
-        for q in range(trans_start[i], trans_start[i + 1] if not summed else trans_start[i]):
-            p = trans_pair[q]
-            fx -= pair_f[p, 0]
-            fy -= pair_f[p, 1]
-            fz -= pair_f[p, 2]
-            cx += pair_c[p, 0]
-            cy += pair_c[p, 1]
-            cz += pair_c[p, 2]
+        fx += sum_f[i, 0]
+        fy += sum_f[i, 1]
+        fz += sum_f[i, 2]
+        cx = sum_c[i, 0]
+        cy = sum_c[i, 1]
+        cz = sum_c[i, 2]
         a = radius[i]
         tx = a * cx
         ty = a * cy
@@ -266,27 +250,29 @@ def _kick_drift(pos, vel, omega, force, torque, inv_mass, inv_inertia, dt, ref_p
 @njit(cache=True, error_model="numpy")
 def rebuild(pos, radius, skin, dim2, row_start, partner, hist, ref_pos):
     """New Verlet list around the current positions, history carried over."""
-    new_start, new_partner, trans_start, trans_pair = build_pairs(pos, radius, skin, dim2)
+    new_start, new_partner, slab_start, slab_members = build_pairs(pos, radius, skin, dim2)
     new_hist = carry_history(row_start, partner, hist, new_start, new_partner)
     ref_pos[:, :] = pos
-    return new_start, new_partner, new_hist, trans_start, trans_pair
+    return new_start, new_partner, new_hist, slab_start, slab_members
 
 
 @njit(cache=True, error_model="numpy")
 def compute_forces(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, wall_point0, wall_normal,
-                   wall_hist, gravity, ext_force, dim2, row_start, partner, hist, trans_start, trans_pair,
-                   pair_f, pair_c, t, dt, update, force, torque):
-    """Forces and torques at the current state (no integration)."""
-    pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, hist, dt, update, pair_f, pair_c)
-    gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
-                  wall_hist, gravity, ext_force, dim2, row_start, partner, trans_start, trans_pair,
-                  pair_f, pair_c, False, t, dt, force, torque, mass, mass, 0, pos, 0.0)
+                   wall_hist, gravity, ext_force, dim2, row_start, partner, hist, slab_start, slab_members,
+                   t, dt, update, force, torque):
+    """Forces and torques at the current state (no integration; history updated only if ``update``)."""
+    sum_f = np.zeros_like(force)
+    sum_c = np.zeros_like(force)
+    pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
+                dt, update, sum_f, sum_c)
+    gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal, wall_hist,
+                  gravity, ext_force, dim2, sum_f, sum_c, t, dt, force, torque, mass, mass, 0, pos, 0.0)
 
 
 @njit(cache=True, error_model="numpy")
 def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia, species, pp, pw,
             wall_motion, wall_point0, wall_normal, wall_hist, gravity, ext_force, dim2,
-            row_start, partner, hist, trans_start, trans_pair, ref_pos, skin, step0, dt, nsteps, serial):
+            row_start, partner, hist, slab_start, slab_members, ref_pos, skin, step0, dt, nsteps):
     """Run ``nsteps`` velocity-Verlet DEM steps from step ``step0`` (time step0 * dt).
 
     Order of one step::
@@ -300,35 +286,25 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
     The closing half kick of one step, the opening half kick and the drift of the
     next are fused into the force-gathering pass; results are bitwise those of the
     separate passes, so chunking a run differently does not change it.
-    With ``serial`` (one thread) pair forces are scattered straight into
-    per-particle sums; otherwise they go through per-pair buffers gathered per
-    particle, which keeps the sums race-free and independent of the thread count.
     The list arrays change size on rebuild, so they are returned with the rebuild count.
     """
     limit2 = (0.5 * skin) ** 2
-    nbuf = pos.shape[0] if serial else partner.shape[0]
-    pair_f = np.zeros((nbuf, 3))
-    pair_c = np.zeros((nbuf, 3))
+    sum_f = np.zeros_like(force)
+    sum_c = np.zeros_like(force)
     rebuilds = 0
     if nsteps <= 0:
-        return row_start, partner, hist, trans_start, trans_pair, rebuilds
+        return row_start, partner, hist, slab_start, slab_members, rebuilds
     moved = _kick_drift(pos, vel, omega, force, torque, inv_mass, inv_inertia, dt, ref_pos, limit2)
     for s in range(nsteps):
         t = (step0 + s + 1) * dt
         if moved > 0:
-            row_start, partner, hist, trans_start, trans_pair = rebuild(
+            row_start, partner, hist, slab_start, slab_members = rebuild(
                 pos, radius, skin, dim2, row_start, partner, hist, ref_pos)
             rebuilds += 1
-            if not serial and partner.shape[0] != pair_f.shape[0]:
-                pair_f = np.zeros((partner.shape[0], 3))
-                pair_c = np.zeros((partner.shape[0], 3))
-        if serial:
-            pair_forces_serial(pos, vel, omega, radius, mass, species, pp, row_start, partner, hist, dt, True,
-                               pair_f, pair_c)
-        else:
-            pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, hist, dt, True, pair_f, pair_c)
+        pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
+                    dt, True, sum_f, sum_c)
         mode = 2 if s < nsteps - 1 else 1
         moved = gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
-                              wall_hist, gravity, ext_force, dim2, row_start, partner, trans_start, trans_pair,
-                              pair_f, pair_c, serial, t, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2)
-    return row_start, partner, hist, trans_start, trans_pair, rebuilds
+                              wall_hist, gravity, ext_force, dim2, sum_f, sum_c, t, dt, force, torque, inv_mass,
+                              inv_inertia, mode, ref_pos, limit2)
+    return row_start, partner, hist, slab_start, slab_members, rebuilds

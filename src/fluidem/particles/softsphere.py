@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
 from ..errors import CaseError
@@ -49,7 +48,7 @@ class SoftSphereEngine:
         self.steps = 0
         self.rebuilds = 0
         self.ref_pos = st.position.copy()
-        self.row_start, self.partner, self.trans_start, self.trans_pair = build_pairs(
+        self.row_start, self.partner, self.slab_start, self.slab_members = build_pairs(
             st.position, st.radius, self.skin, self.dim2)
         self.hist = np.zeros((self.partner.shape[0], 3))
         self._compute_forces(update=False)
@@ -144,24 +143,21 @@ class SoftSphereEngine:
     # ------------------------------------------------------------ stepping
     def _compute_forces(self, update: bool):
         st = self.state
-        npairs = self.partner.shape[0]
         K.compute_forces(st.position, st.velocity, st.omega, st.radius, st.mass, st.species, self.pp, self.pw,
                          self.wall_motion, self.wall_point0, self.wall_normal, self.wall_hist, self.gravity,
-                         self.ext_force, self.dim2, self.row_start, self.partner, self.hist, self.trans_start,
-                         self.trans_pair, np.zeros((npairs, 3)), np.zeros((npairs, 3)), self.time, self.dt,
-                         update, st.force, st.torque)
+                         self.ext_force, self.dim2, self.row_start, self.partner, self.hist, self.slab_start,
+                         self.slab_members, self.time, self.dt, update, st.force, st.torque)
 
     def advance(self, nsteps: int) -> None:
         """Run ``nsteps`` DEM steps of ``self.dt`` in one compiled call."""
         if nsteps <= 0:
             return
         st = self.state
-        (self.row_start, self.partner, self.hist, self.trans_start, self.trans_pair, nreb) = K.advance(
+        (self.row_start, self.partner, self.hist, self.slab_start, self.slab_members, nreb) = K.advance(
             st.position, st.velocity, st.omega, st.force, st.torque, st.radius, st.mass, self.inv_mass,
             self.inv_inertia, st.species, self.pp, self.pw, self.wall_motion, self.wall_point0, self.wall_normal,
             self.wall_hist, self.gravity, self.ext_force, self.dim2, self.row_start, self.partner, self.hist,
-            self.trans_start, self.trans_pair, self.ref_pos, self.skin, self.steps, self.dt, nsteps,
-            numba.get_num_threads() == 1)
+            self.slab_start, self.slab_members, self.ref_pos, self.skin, self.steps, self.dt, nsteps)
         self.steps += nsteps
         self.time = self.steps * self.dt
         self.rebuilds += nreb
@@ -172,8 +168,8 @@ class SoftSphereEngine:
         out = {f"state/{k}": v for k, v in self.state.arrays().items()}
         out.update({
             "engine/wall_hist": self.wall_hist, "engine/ref_pos": self.ref_pos, "engine/row_start": self.row_start,
-            "engine/partner": self.partner, "engine/hist": self.hist, "engine/trans_start": self.trans_start,
-            "engine/trans_pair": self.trans_pair, "engine/ext_force": self.ext_force,
+            "engine/partner": self.partner, "engine/hist": self.hist, "engine/slab_start": self.slab_start,
+            "engine/slab_members": self.slab_members, "engine/ext_force": self.ext_force,
         })
         return out
 
@@ -185,7 +181,7 @@ class SoftSphereEngine:
             getattr(self.state, k)[...] = arrays[f"state/{k}"]
         for k in ("wall_hist", "ref_pos", "ext_force"):
             getattr(self, k)[...] = arrays[f"engine/{k}"]
-        for k in ("row_start", "partner", "hist", "trans_start", "trans_pair"):
+        for k in ("row_start", "partner", "hist", "slab_start", "slab_members"):
             setattr(self, k, np.ascontiguousarray(arrays[f"engine/{k}"]))
         self.dt = float(scalars["dt"])
         self.steps = int(scalars["steps"])

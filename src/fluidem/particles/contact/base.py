@@ -11,8 +11,8 @@ slot  linear_spring_dashpot  hertz_mindlin
 1     k_n [N/m]              E* [Pa]
 2     k_t [N/m]              G* [Pa]
 3     zeta_n [-]             A [-] (dimensionless Hertz damping)
-4     eta_n fixed [N s/m]    unused
-5     eta_t / eta_n [-]      eta_t / eta_n rule: 1 = Mindlin form
+4     eta_n fixed [N s/m]    A sqrt(4/3 E*)  (derived)
+5     eta_t / eta_n [-]      A sqrt(16/3 G*) (derived)
 6     unused                 unused
 7     friction mu [-]        friction mu [-]
 ====  =====================  ============================================

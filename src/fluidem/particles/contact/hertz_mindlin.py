@@ -102,8 +102,12 @@ class HertzMindlin(ContactModel):
 
     def pack(self, body_i, body_j) -> np.ndarray:
         row = empty_row(CODE, self.friction)
-        row[1], row[2] = self._moduli(body_i, body_j)
-        row[3] = damping_constant(self.restitution)
+        e_star, g_star = self._moduli(body_i, body_j)
+        a = damping_constant(self.restitution)
+        row[1], row[2], row[3] = e_star, g_star, a
+        # precomputed damping factors: η_n = A sqrt(4/3 E*) sqrt(m* a), η_t = A sqrt(16/3 G*) sqrt(m* a), a = sqrt(R* δ)
+        row[4] = a * math.sqrt(4.0 / 3.0 * e_star)
+        row[5] = a * math.sqrt(16.0 / 3.0 * g_star)
         return row
 
     def contact_time(self, m_eff, r_eff, impact_velocity, body_i=None, body_j=None) -> float:
@@ -113,10 +117,11 @@ class HertzMindlin(ContactModel):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def coefficients(p, overlap, m_eff, r_eff):
-    """(elastic normal force [N], η_n [N s/m], k_t [N/m], η_t [N s/m]) of the Hertz–Mindlin law above."""
-    k_h = 4.0 / 3.0 * p[1] * math.sqrt(r_eff)
-    sq = math.sqrt(overlap)
-    k_t = 8.0 * p[2] * math.sqrt(r_eff) * sq
-    eta_n = p[3] * math.sqrt(m_eff * k_h * sq)
-    eta_t = p[3] * math.sqrt(m_eff * k_t / 1.5)
-    return k_h * overlap * sq, eta_n, k_t, eta_t
+    """(elastic normal force [N], η_n [N s/m], k_t [N/m], η_t [N s/m]) of the Hertz–Mindlin law above.
+
+    With a = sqrt(R* δ): F_el = (4/3) E* a δ, k_t = 8 G* a, η_n = A sqrt((4/3) E* m* a),
+    η_t = A sqrt((16/3) G* m* a), i.e. the formulas of the module docstring with two square roots.
+    """
+    a = math.sqrt(r_eff * overlap)
+    s = math.sqrt(m_eff * a)
+    return 4.0 / 3.0 * p[1] * a * overlap, p[4] * s, 8.0 * p[2] * a, p[5] * s

@@ -7,7 +7,6 @@ Public surface::
     sim = fd.Simulation(case, out_dir="runs/pour")
     sim.run(until=0.5)
 """
-from . import _threads  # noqa: F401  (sets the threading layer before numba starts)
 from .case import Case, load_case
 from .errors import CaseError
 from .schedule import Every, EveryTime

@@ -1,17 +1,22 @@
-"""Thread set-up, done before Numba's first parallel launch.
+"""Thread set-up for Numba's parallel kernels.
 
-Numba's TBB layer was measured here at 4–40× slower per parallel region than
-OpenMP on 2 cores, so OpenMP is preferred unless the user set a layer.
+Small systems run on one thread by default: below a few thousand particles a DEM
+step takes tens of microseconds, less than the cost of waking a thread team, and
+on a machine whose other cores are busy every parallel region waits for a
+descheduled thread (measured here: 2 threads ran the 500-particle pour 50x slower
+than 1 while another process held the second core).
 """
-import os
+
+SERIAL_BELOW = 4000  # particles
 
 
-
-
-def set_threads(n: int | None) -> int:
-    """Use ``n`` compute threads (None: all available); returns the number in use."""
+def set_threads(n: int | None, n_particles: int | None = None) -> int:
+    """Use ``n`` compute threads (None: one for small systems, else all cores); returns the number in use."""
     import numba
 
-    if n is not None:
-        numba.set_num_threads(min(int(n), numba.config.NUMBA_NUM_THREADS))
+    if n is None and n_particles is not None and n_particles < SERIAL_BELOW:
+        n = 1
+    if n is None:
+        n = numba.config.NUMBA_NUM_THREADS
+    numba.set_num_threads(max(1, min(int(n), numba.config.NUMBA_NUM_THREADS)))
     return numba.get_num_threads()

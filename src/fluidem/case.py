@@ -208,7 +208,7 @@ class Case(Strict):
     time: Time
     neighbours: Neighbours = Field(default_factory=Neighbours)
     output: Output = Field(default_factory=Output)
-    threads: int | None = Field(None, ge=1, description="compute threads; default all cores")
+    threads: int | None = Field(None, ge=1, description="compute threads; default all cores (one below 4000 particles)")
 
     @model_validator(mode="after")
     def _defaults(self):

@@ -55,7 +55,8 @@ def cmd_run(args) -> int:
     until = args.until if args.until is not None else sim.case.time.end
     if not args.quiet:
         print(f"fluidem: {sim.case.name}: {sim.engine.state.n} particles, dt = {sim.dt:.3g} s, "
-              f"to t = {until:g} s, {sim.threads} thread(s) -> {out}", file=sys.stderr)
+              f"to t = {until:g} s, {sim.threads} thread(s) -> {out}",
+              file=sys.stderr)
     try:
         summary = sim.run(until=until)
     except KeyboardInterrupt:
@@ -97,7 +98,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--out", help="run directory (default runs/<case>-<timestamp>); must be new or empty")
     r.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="override a case key by dotted name, e.g. --set particles.contact.restitution=1.0")
-    r.add_argument("--threads", type=int, help="compute threads (default: all cores)")
+    r.add_argument("--threads", type=int, help="compute threads (default: all cores; one below 4000 particles)")
     r.add_argument("--resume", metavar="DIR", help="continue a stopped run from DIR/restart.h5")
     r.add_argument("--quiet", action="store_true", help="no progress lines")
     r.set_defaults(func=cmd_run)

@@ -29,6 +29,21 @@ from .state import ParticleState
 CHUNK_WALL_SECONDS = 0.25  # a compiled chunk should return to Python about this often (Ctrl-C, progress)
 
 
+def seconds_since_process_start() -> float | None:
+    """Wall seconds since this process started (Linux /proc); None elsewhere."""
+    import os
+
+    try:
+        ticks = os.sysconf("SC_CLK_TCK")
+        with open("/proc/self/stat") as f:
+            start = int(f.read().rsplit(")", 1)[1].split()[19]) / ticks
+        with open("/proc/uptime") as f:
+            uptime = float(f.read().split()[0])
+        return uptime - start
+    except (OSError, ValueError, IndexError):
+        return None
+
+
 class Checkpointer:
     """Observer writing ``restart.h5`` atomically."""
 
@@ -72,8 +87,8 @@ class Simulation:
 
     def __init__(self, case: Case, out_dir: str | Path | None = None, resume: bool = False, progress: bool = False):
         self.case = case
-        self.threads = _threads.set_threads(case.threads)
         self.out_dir = Path(out_dir) if out_dir is not None else None
+        self.threads = _threads.set_threads(case.threads, sum(s.count for s in case.particles.species))
         restart = None
         if resume:
             if self.out_dir is None or not (self.out_dir / RESTART_NAME).exists():
@@ -90,6 +105,7 @@ class Simulation:
         self.wall_time = 0.0
         self.particle_steps = 0
         self._summary_extra: dict = {}
+        self.startup_s: float | None = None  # process start → first compiled chunk done
         if self.out_dir is not None:
             self._prepare_run_directory(resume)
             self._default_observers()
@@ -175,6 +191,8 @@ class Simulation:
                 t0 = _time.perf_counter()
                 n = stop - self.step
                 self.step_once(n)
+                if self.startup_s is None:
+                    self.startup_s = seconds_since_process_start()
                 self._run_particle_steps += n * self.engine.state.n
                 spent = _time.perf_counter() - t0
                 # aim for CHUNK_WALL_SECONDS per compiled call
@@ -261,6 +279,7 @@ class Simulation:
             "contact_time_s": getattr(eng, "contact_time", None),
             "neighbour_rebuilds": eng.rebuilds,
             "threads": self.threads,
+            "startup_s": self.startup_s,
             "coordination_number": c["coordination"],
             "max_overlap_rel": c["max_overlap_rel"],
             "kinetic_energy_J": e["kinetic_J"],

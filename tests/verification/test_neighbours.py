@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fluidem.particles._neighbours_kernels import brute_force_pairs, build_pairs
+from fluidem.particles._neighbours_kernels import brute_force_pairs, build_pairs, carry_history
 
 
 def csr_pairs(row_start, partner):
@@ -96,6 +96,43 @@ def test_cell_list_degenerate_layouts():
     check_lists(line, np.full(n, 0.7e-3), 0.1e-3, False)
     check_lists(np.zeros((5, 3)), np.full(5, 1e-3), 0.0, False)
     check_lists(np.zeros((1, 3)), np.full(1, 1e-3), 0.1e-3, False)
+
+
+@pytest.mark.parametrize("dim2", [False, True], ids=["3d", "2d"])
+def test_history_follows_its_pair_across_a_rebuild(all_threads, dim2):
+    """carry_history against a dictionary: a persisting pair keeps its tangential spring exactly; a pair
+    whose owner changed gets it negated (it is kept relative to the owner: n and v_i − v_j flip); a new
+    pair starts at zero. Particles move a little and the outermost one far, so slab boundaries shift and
+    many pairs change owner."""
+    rng = np.random.default_rng(21)
+    skin = 0.3e-3
+    pos, radius = random_packing(8, 500, dim2)
+    rs0, partner0, _, _ = build_pairs(pos, radius, skin, dim2)
+    owner0 = np.repeat(np.arange(pos.shape[0]), np.diff(rs0))
+    hist0 = rng.normal(0.0, 1e-6, (partner0.shape[0], 3))
+    old = {(int(i), int(j)): hist0[p] for p, (i, j) in enumerate(zip(owner0, partner0))}
+
+    kept = flipped = new = 0
+    for stretch in (3e-3, 7e-3, 11e-3):
+        moved = pos + rng.uniform(-1.0, 1.0, pos.shape) * 0.2 * skin
+        if dim2:
+            moved[:, 2] = pos[:, 2]
+        axis = int(np.argmax(np.ptp(pos[:, :2] if dim2 else pos, axis=0)))
+        moved[np.argmax(moved[:, axis]), axis] += stretch  # stretch the extent along the slab axis
+        rs1, partner1, _, _ = build_pairs(moved, radius, skin, dim2)
+        hist1 = carry_history(rs0, partner0, hist0, rs1, partner1)
+        owner1 = np.repeat(np.arange(pos.shape[0]), np.diff(rs1))
+        for p, (i, j) in enumerate(zip(owner1.tolist(), partner1.tolist())):
+            if (i, j) in old:
+                np.testing.assert_array_equal(hist1[p], old[(i, j)])
+                kept += 1
+            elif (j, i) in old:
+                np.testing.assert_array_equal(hist1[p], -old[(j, i)])
+                flipped += 1
+            else:
+                np.testing.assert_array_equal(hist1[p], 0.0)
+                new += 1
+    assert kept > 300 and flipped > 10 and new > 0, (kept, flipped, new)
 
 
 @pytest.mark.parametrize("dimensions", [3, 2])

@@ -1,0 +1,747 @@
+"""Volume-averaged gas phase (Hoomans 1996 eqs 42-48, after Kuipers et al. 1992) on a staggered grid.
+
+``GasSolver.advance(state, dt, t, ...)`` moves a ``GasState`` from t to t + dt. The
+particle side enters only as arrays: voidage ε, the interphase coefficient β with the
+solids velocity, and/or an explicit momentum source. Orchestration lives here; the
+loops over cells and faces are the compiled kernels of ``_solver_kernels``.
+
+Equations (ε voidage, ρ gas density, u gas velocity (interstitial), v solids velocity)::
+
+    ∂(ερ)/∂t + ∇·(ερu) = 0                                              eq. 42
+    ∂(ερu)/∂t + ∇·(ερuu) = −ε∇p − β(u − v) − ∇·(ετ_g) + ερg + s          eq. 43
+    ρ = p M/(RT)  (or a constant)                                       eq. 44
+    τ_g = −[(λ_g − 2/3 μ_g)(∇·u) I + μ_g (∇u + ∇uᵀ)],  λ_g = 0          eq. 48
+
+Time step (semi-implicit, as Kuipers et al. 1992): convection (donor-cell mass fluxes,
+upwind or TVD face values) and viscous stress are explicit; pressure, interphase drag
+and the inertia/gravity density are implicit. Each face velocity is then
+u = û − D ∂p/∂x with a scalar D, so the pressure correction of the SIMPLE family is
+exact here: the outer iterations are Newton iterations of the continuity equation for
+the pressure, with ρ(p) of eq. 44. They stop when the summed cell mass residual,
+relative to the gas flow through the domain, is below ``tolerance``. The constant-
+density gas converges in one correction. Stability needs the Courant number
+(|u| dt/dx + |v| dt/dy) below about 1 (upwind) or 0.5 (TVD) and the viscous number
+ν dt (2/dx² + 2/dy²) below 1; drag never limits dt.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, replace
+from typing import Mapping
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from ..errors import CaseError
+from . import _solver_kernels as K
+from ._operators import TVD, UPWIND, centre_to_x_faces, centre_to_y_faces
+from .boundaries import BoundaryCondition, Inflow, PressureOutlet, evaluate
+from .grid import (FREE_SLIP, INFLOW, INTERIOR, NO_SLIP, OUTFLOW, PERIODIC, PRESSURE, SIDES, StaggeredGrid,
+                   check_sides)
+
+GAS_CONSTANT = 8.314462618  # R [J mol^-1 K^-1]
+SCHEMES = {"upwind": UPWIND, "tvd": TVD}
+SLOW_CONVERGENCE = 0.3  # refactorise the pressure matrix when an iteration cuts the residual by less than this
+
+
+# ================================================================ properties and state
+@dataclass(frozen=True)
+class GasProperties:
+    """Physical properties of the gas (Hoomans 1996 §3.2: air at 293 K).
+
+    Parameters
+    ----------
+    viscosity : float
+        Shear viscosity μ_g [Pa s], constant (eq. 48; the bulk viscosity λ_g is zero).
+    molar_mass : float
+        M_g [kg/mol] of the ideal-gas law, eq. 44.
+    temperature : float
+        T [K]; the gas is isothermal.
+    density : float or None
+        None: ideal gas, ρ_g = p M_g/(R T) (eq. 44). A number: constant density [kg/m^3].
+    reference_pressure : float
+        [Pa]: default outlet pressure, and the pressure level of hydrostatic initial
+        states without a pressure boundary.
+    """
+
+    viscosity: float = 1.8e-5
+    molar_mass: float = 28.8e-3
+    temperature: float = 293.0
+    density: float | None = None
+    reference_pressure: float = 101325.0
+
+    def __post_init__(self):
+        def bad(key, value, allowed):
+            raise CaseError(f"gas.{key} = {value!r}: must be {allowed}")
+
+        for key in ("viscosity", "molar_mass", "temperature", "reference_pressure"):
+            value = getattr(self, key)
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
+                bad(key, value, "a number")
+        if not (math.isfinite(self.viscosity) and self.viscosity >= 0.0):
+            bad("viscosity", self.viscosity, ">= 0 [Pa s]")
+        if not (math.isfinite(self.molar_mass) and self.molar_mass > 0.0):
+            bad("molar_mass", self.molar_mass, "> 0 [kg/mol]")
+        if not (math.isfinite(self.temperature) and self.temperature > 0.0):
+            bad("temperature", self.temperature, "> 0 [K]")
+        if not (math.isfinite(self.reference_pressure) and self.reference_pressure > 0.0):
+            bad("reference_pressure", self.reference_pressure, "> 0 [Pa]")
+        if self.density is not None and not (isinstance(self.density, (int, float, np.floating, np.integer))
+                                             and math.isfinite(self.density) and self.density > 0.0):
+            bad("density", self.density, "None (ideal gas) or > 0 [kg/m^3]")
+
+    @property
+    def ideal(self) -> bool:
+        """True for the ideal gas of eq. 44, False for constant density."""
+        return self.density is None
+
+    @property
+    def compressibility(self) -> float:
+        """dρ/dp = M/(RT) [s^2/m^2] of the ideal gas; 0 for constant density."""
+        return self.molar_mass / (GAS_CONSTANT * self.temperature) if self.ideal else 0.0
+
+    def density_at(self, pressure):
+        """Gas density [kg/m^3] at ``pressure`` [Pa] (eq. 44, or the constant)."""
+        if self.ideal:
+            return np.asarray(pressure, float) * self.compressibility
+        return np.full(np.shape(pressure), float(self.density)) if np.ndim(pressure) else float(self.density)
+
+
+@dataclass
+class GasState:
+    """Gas fields on the staggered grid, SI units (layout in ``gas/grid.py``).
+
+    p, rho, voidage : (nx, ny) float64   pressure [Pa], density [kg/m^3], voidage ε [-] at centres
+    u : (nx + 1, ny) float64             interstitial x velocity on x-faces [m/s]
+    v : (nx, ny + 1) float64             interstitial y velocity on y-faces [m/s]
+    """
+
+    p: np.ndarray
+    rho: np.ndarray
+    u: np.ndarray
+    v: np.ndarray
+    voidage: np.ndarray
+
+    def copy(self) -> "GasState":
+        return GasState(*(getattr(self, k).copy() for k in ("p", "rho", "u", "v", "voidage")))
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        return {k: getattr(self, k) for k in ("p", "rho", "u", "v", "voidage")}
+
+
+@dataclass(frozen=True)
+class StepInfo:
+    """What one ``GasSolver.advance`` did.
+
+    iterations : pressure corrections made (0: the predicted velocities already conserved mass)
+    mass_residual : Σ_cells |continuity residual| / reference flow [-] at the end of the step,
+        the reference flow being inflow + outflow + Σ|accumulation| + 1e-4 × mass/dt [kg/s]
+    converged : mass_residual <= tolerance
+    inflow_rate, outflow_rate : gas mass flow into / out of the domain through its boundary faces [kg/s]
+    mass : gas mass in the domain after the step, Σ ε ρ V [kg]
+    mass_change_rate : (mass after − mass before) / dt [kg/s]
+    courant : max|u| dt/dx + max|v| dt/dy after the step [-]
+    """
+
+    iterations: int
+    mass_residual: float
+    converged: bool
+    inflow_rate: float
+    outflow_rate: float
+    mass: float
+    mass_change_rate: float
+    courant: float
+
+    @property
+    def mass_balance_error(self) -> float:
+        """|inflow − outflow − d(mass)/dt| / inflow [-] (absolute [kg/s] when nothing flows in)."""
+        err = abs(self.inflow_rate - self.outflow_rate - self.mass_change_rate)
+        return err / self.inflow_rate if self.inflow_rate > 0.0 else err
+
+
+class GasConvergenceError(RuntimeError):
+    """The gas solution stopped being finite (a time step far beyond the stability limit)."""
+
+
+# ================================================================ solver
+class GasSolver:
+    """Pressure-correction solver of the volume-averaged gas equations (Hoomans 1996 eqs 42-48).
+
+    Parameters
+    ----------
+    grid : StaggeredGrid
+    props : GasProperties
+    boundaries : dict
+        A condition on each side: ``{"left": Wall(), "right": Wall(), "bottom": Inflow(...),
+        "top": PressureOutlet()}``; see ``fluidem.gas.boundaries``.
+    gravity : (gx, gy) or (gx, gy, 0)
+        [m/s^2].
+    convection : {"upwind", "tvd"}
+        Face values of the convected momentum: first-order upwind (donor cell) or the
+        second-order TVD scheme with the van Leer limiter.
+    tolerance : float
+        Mass-residual tolerance of every step (see ``StepInfo.mass_residual``).
+    max_iterations : int
+        Most pressure corrections per step.
+    jacobian_reuse : float
+        The factorised pressure matrix is reused while the new matrix differs from it
+        by at most this fraction (max norm); the iterations then converge a little
+        slower but skip the factorisation. 0 refactorises whenever anything changed.
+
+    Examples
+    --------
+    >>> grid = StaggeredGrid(cells=(15, 25), size=(0.15, 0.5), depth=0.004)
+    >>> solver = GasSolver(grid, GasProperties(), {"left": Wall(), "right": Wall(),
+    ...     "bottom": Inflow(superficial=1.8, voidage=0.4), "top": PressureOutlet()})
+    >>> state = solver.initial_state(voidage=0.4)
+    >>> info = solver.advance(state, dt=1e-4, t=0.0, beta=beta, solids_u=0.0, solids_v=0.0)
+    """
+
+    def __init__(self, grid: StaggeredGrid, props: GasProperties, boundaries: Mapping[str, BoundaryCondition],
+                 gravity=(0.0, -9.81), convection: str = "upwind", tolerance: float = 1e-10,
+                 max_iterations: int = 50, jacobian_reuse: float = 1e-2):
+        if not isinstance(grid, StaggeredGrid):
+            raise CaseError(f"gas.grid = {grid!r}: must be a StaggeredGrid(cells=..., size=..., depth=...)")
+        if not isinstance(props, GasProperties):
+            raise CaseError(f"gas properties = {props!r}: must be GasProperties(...)")
+        check_sides(boundaries)
+        g = np.asarray(gravity, float).ravel()
+        if g.size not in (2, 3) or not np.all(np.isfinite(g)) or (g.size == 3 and g[2] != 0.0):
+            raise CaseError(f"gravity = {tuple(gravity)!r}: must be (gx, gy) or (gx, gy, 0) [m/s^2] for a 2D gas grid")
+        if convection not in SCHEMES:
+            raise CaseError(f"gas.convection = {convection!r}: allowed are {sorted(SCHEMES)}")
+        if not (isinstance(tolerance, (int, float)) and 0.0 < tolerance < 1.0):
+            raise CaseError(f"gas.tolerance = {tolerance!r}: must be in (0, 1)")
+        if not (isinstance(max_iterations, int) and max_iterations >= 1):
+            raise CaseError(f"gas.max_iterations = {max_iterations!r}: must be an integer >= 1")
+        if not (0.0 <= jacobian_reuse < 1.0):
+            raise CaseError(f"gas.jacobian_reuse = {jacobian_reuse!r}: must be in [0, 1)")
+        self.grid, self.props = grid, props
+        self.boundaries = dict(boundaries)
+        self.gravity = (float(g[0]), float(g[1]))
+        self.convection = convection
+        self.tolerance = float(tolerance)
+        self.max_iterations = max_iterations
+        self.jacobian_reuse = float(jacobian_reuse)
+        self.flags = grid.cell_flags(self.boundaries)
+        self.periodic_x = self.boundaries["left"].flag == PERIODIC
+        self.periodic_y = self.boundaries["bottom"].flag == PERIODIC
+        self._setup_faces()
+        self._setup_maps()
+        self._setup_matrix()
+        self._setup_work()
+        self._set_boundary_values(0.0)
+        self.factorisations = 0  # pressure-matrix factorisations so far (for tests and benchmarks)
+
+    # ------------------------------------------------------------ set-up
+    def _setup_faces(self):
+        """Face kinds, inward signs and fixed-value weights from the flags."""
+        nx, ny, fl = self.grid.nx, self.grid.ny, self.flags
+        kind_of_ghost = {FREE_SLIP: K.FIXED, NO_SLIP: K.FIXED, INFLOW: K.FIXED, PRESSURE: K.SOLVED,
+                         OUTFLOW: K.OUTFLOW_FACE, PERIODIC: K.SOLVED}
+
+        def kinds(n_faces_along, n_across, ghost_lo, ghost_hi):
+            kind = np.full((n_faces_along, n_across), K.SOLVED, np.int8)
+            sign = np.zeros((n_faces_along, n_across), np.int8)
+            kind[0] = [kind_of_ghost[int(f)] for f in ghost_lo]
+            kind[-1] = [K.COPY if f == PERIODIC else kind_of_ghost[int(f)] for f in ghost_hi]
+            sign[0] = np.where(ghost_lo == PERIODIC, 0, 1)
+            sign[-1] = np.where(ghost_hi == PERIODIC, 0, -1)
+            return kind, sign
+
+        self.ukind, self.ubnd = kinds(nx + 1, ny, fl[0, 1:-1], fl[-1, 1:-1])
+        vk, vs = kinds(ny + 1, nx, fl[1:-1, 0], fl[1:-1, -1])
+        self.vkind, self.vbnd = np.ascontiguousarray(vk.T), np.ascontiguousarray(vs.T)
+        # inflow: per side the segment weights of its faces
+        self._inflows = []
+        for side in SIDES:
+            bc = self.boundaries[side]
+            if isinstance(bc, Inflow):
+                self._inflows.append((side, bc, bc.face_weights(self.grid.side_faces(side))))
+        self._pressure_sides = [(s, bc) for s, bc in self.boundaries.items() if isinstance(bc, PressureOutlet)]
+        self.has_outflow = any(bc.flag == OUTFLOW for bc in self.boundaries.values())
+
+    def _setup_maps(self):
+        """row_of / col_of: padded centre cell -> equation row / pressure unknown (-1: none)."""
+        nx, ny, fl = self.grid.nx, self.grid.ny, self.flags
+        k = np.arange(nx * ny, dtype=np.int64).reshape(nx, ny)
+        row = np.full((nx + 2, ny + 2), -1, np.int64)
+        col = np.full((nx + 2, ny + 2), -1, np.int64)
+        row[1:-1, 1:-1] = col[1:-1, 1:-1] = k
+        zero_gradient = (FREE_SLIP, NO_SLIP, INFLOW, OUTFLOW)
+        for ghost, adjacent, opposite in (((0, slice(1, -1)), k[0], k[-1]), ((-1, slice(1, -1)), k[-1], k[0]),
+                                          ((slice(1, -1), 0), k[:, 0], k[:, -1]),
+                                          ((slice(1, -1), -1), k[:, -1], k[:, 0])):
+            f = fl[ghost]
+            row[ghost] = np.where(f == PERIODIC, opposite, -1)
+            col[ghost] = np.where(f == PERIODIC, opposite, np.where(np.isin(f, zero_gradient), adjacent, -1))
+        self.row_of, self.col_of = row, col
+        # ghost rules of centre scalars, indexed by flag
+        self.prule = np.zeros(9, np.int64)
+        self.erule = np.zeros(9, np.int64)
+        for f in (FREE_SLIP, NO_SLIP, INFLOW, OUTFLOW):
+            self.prule[f] = K.R_COPY
+        self.prule[PRESSURE] = K.R_FIXED
+        self.prule[PERIODIC] = K.R_WRAP
+        for f in (FREE_SLIP, NO_SLIP, PRESSURE, OUTFLOW):
+            self.erule[f] = K.R_COPY  # Hoomans 1996 §3.5: wall cells copy the adjacent voidage
+        self.erule[INFLOW] = K.R_FIXED  # Hoomans 1996 §3.5: fixed voidage in influx cells
+        self.erule[PERIODIC] = K.R_WRAP
+        self.efix = np.ones((nx + 2, ny + 2))
+        for side, bc, _ in self._inflows:
+            self.efix[self._ghost_index(side)] = bc.voidage
+        self.pfix = np.zeros((nx + 2, ny + 2))
+
+    @staticmethod
+    def _ghost_index(side):
+        return {"left": (0, slice(1, -1)), "right": (-1, slice(1, -1)),
+                "bottom": (slice(1, -1), 0), "top": (slice(1, -1), -1)}[side]
+
+    def _face_pairs(self, kind, left, right):
+        """(n_faces, 4) (row, col) pairs L-L, L-R, R-L, R-R of faces; left/right: padded centre index arrays."""
+        rl, cl = self.row_of[left], self.col_of[left]
+        rr, cr = self.row_of[right], self.col_of[right]
+        rows = np.stack([rl, rl, rr, rr], axis=-1)
+        cols = np.stack([cl, cr, cl, cr], axis=-1)
+        valid = (rows >= 0) & (cols >= 0) & (kind != K.COPY)[..., None]
+        return rows, cols, valid
+
+    def _setup_matrix(self):
+        """Fixed CSC pattern of the pressure-correction matrix and where each face writes into it."""
+        nx, ny = self.grid.nx, self.grid.ny
+        n = nx * ny
+        I, J = np.meshgrid(np.arange(nx + 1), np.arange(ny), indexing="ij")
+        ur, uc, uv = self._face_pairs(self.ukind, (I, J + 1), (I + 1, J + 1))
+        I, J = np.meshgrid(np.arange(nx), np.arange(ny + 1), indexing="ij")
+        vr, vc, vv = self._face_pairs(self.vkind, (I + 1, J), (I + 1, J + 1))
+        diag = np.arange(n, dtype=np.int64)
+        rows = np.concatenate([ur[uv], vr[vv], diag])
+        cols = np.concatenate([uc[uv], vc[vv], diag])
+        keys = np.unique(cols * n + rows)  # CSC order: by column, then row
+        self._indices = (keys % n).astype(np.int32)
+        self._indptr = np.searchsorted(keys, np.arange(n + 1) * n).astype(np.int32)
+        self._data = np.zeros(keys.size)
+
+        def pos(r, c, valid):
+            p = np.searchsorted(keys, c * n + r)
+            return np.where(valid, p, -1).astype(np.int64)
+
+        self.upos = np.ascontiguousarray(pos(ur, uc, uv))
+        self.vpos = np.ascontiguousarray(pos(vr, vc, vv))
+        self.diag_pos = pos(diag, diag, np.ones(n, bool))
+        # a constant-density gas with no pressure boundary has its level fixed by p'(cell 0) = 0
+        self.pinned = (not self.props.ideal) and not self._pressure_sides
+        if self.pinned:
+            self.pin_pos = np.flatnonzero(self._indices == 0).astype(np.int64)
+            self.pin_diag = int(self.diag_pos[0])
+        else:
+            self.pin_pos = np.zeros(0, np.int64)
+            self.pin_diag = -1
+
+    def _setup_work(self):
+        nx, ny = self.grid.nx, self.grid.ny
+        c = (nx + 2, ny + 2)
+        self.P, self.RHO, self.E = np.zeros(c), np.zeros(c), np.zeros(c)
+        self.U, self.G = np.zeros((nx + 5, ny + 4)), np.zeros((nx + 5, ny + 4))
+        self.V, self.H = np.zeros((nx + 4, ny + 5)), np.zeros((nx + 4, ny + 5))
+        self.exu, self.exv = np.zeros(self.grid.u_shape), np.zeros(self.grid.v_shape)
+        self._rhs_u, self._rhs_v = np.zeros(self.grid.u_shape), np.zeros(self.grid.v_shape)
+        self.Du, self.Dv = np.zeros(self.grid.u_shape), np.zeros(self.grid.v_shape)
+        self.ufix, self.vfix = np.zeros(self.grid.u_shape), np.zeros(self.grid.v_shape)
+        self.wout_u, self.wout_v = np.zeros(self.grid.u_shape), np.zeros(self.grid.v_shape)
+        n = nx * ny
+        self.R, self._dp, self._work_n = np.zeros(n), np.zeros(n), np.zeros(n)
+        self._zero_u, self._zero_v = np.zeros(self.grid.u_shape), np.zeros(self.grid.v_shape)
+        self._lu_data = np.zeros_like(self._data)
+        i0, f0 = np.zeros(1, np.int64), np.zeros(1)
+        self._factors = (i0, i0, f0, i0, i0, f0, f0, i0, i0)  # none yet
+        gd = self.grid
+        self._fpar = np.zeros(13)
+        self._fpar[[K.F_GX, K.F_GY, K.F_DX, K.F_DY, K.F_AX, K.F_AY, K.F_VOL]] = (
+            self.gravity[0], self.gravity[1], gd.dx, gd.dy, gd.area_x, gd.area_y, gd.cell_volume)
+        self._fpar[K.F_COMP] = self.props.compressibility
+        self._fpar[K.F_RHOC] = 0.0 if self.props.ideal else float(self.props.density)
+        self._fpar[K.F_TOL] = self.tolerance
+        self._fpar[K.F_REUSE] = self.jacobian_reuse
+        self._fpar[K.F_SLOW] = SLOW_CONVERGENCE
+        self._ipar = np.zeros(9, np.int64)
+        self._ipar[[K.I_NX, K.I_NY, K.I_MAXIT, K.I_PIN]] = nx, ny, self.max_iterations, self.pin_diag
+        self._out = np.zeros(9)
+        self._scheme = SCHEMES[self.convection]
+        self._dxdy = (gd.dx, gd.dy)
+
+    # ------------------------------------------------------------ boundary values
+    def _set_boundary_values(self, t: float) -> None:
+        """Inflow face velocities (ufix/vfix) and prescribed boundary-cell pressures (pfix) at time t."""
+        self._bc_time = t
+        for side, bc, w in self._inflows:
+            vel = w.T @ bc.velocities(t)  # interstitial, positive inward
+            if side == "left":
+                self.ufix[0] = vel
+            elif side == "right":
+                self.ufix[-1] = -vel
+            elif side == "bottom":
+                self.vfix[:, 0] = vel
+            else:
+                self.vfix[:, -1] = -vel
+        for side, bc in self._pressure_sides:
+            p = self.props.reference_pressure if bc.pressure is None else evaluate(bc.pressure, t)
+            self.pfix[self._ghost_index(side)] = p
+
+    def _outflow_weights(self, u: np.ndarray, v: np.ndarray) -> None:
+        """Shares of the total outflow per continuous-outflow face: the outward mass flux through the
+        adjacent interior face at the start of the step (zero gradient), or the face area if none flows."""
+        nx, ny = self.grid.nx, self.grid.ny
+        E, RHO = self.E, self.RHO
+        wu, wv = self.wout_u, self.wout_v
+        wu[:] = 0.0
+        wv[:] = 0.0
+        ko, area = K.OUTFLOW_FACE, []
+        if (self.ukind[0] == ko).any():
+            m = self.ukind[0] == ko
+            wu[0, m] = (-u[min(1, nx), :] * E[1, 1:-1] * RHO[1, 1:-1] * self.grid.area_x)[m]
+        if (self.ukind[-1] == ko).any():
+            m = self.ukind[-1] == ko
+            wu[-1, m] = (u[max(nx - 1, 0), :] * E[-2, 1:-1] * RHO[-2, 1:-1] * self.grid.area_x)[m]
+        if (self.vkind[:, 0] == ko).any():
+            m = self.vkind[:, 0] == ko
+            wv[m, 0] = (-v[:, min(1, ny)] * E[1:-1, 1] * RHO[1:-1, 1] * self.grid.area_y)[m]
+        if (self.vkind[:, -1] == ko).any():
+            m = self.vkind[:, -1] == ko
+            wv[m, -1] = (v[:, max(ny - 1, 0)] * E[1:-1, -2] * RHO[1:-1, -2] * self.grid.area_y)[m]
+        total = wu.sum() + wv.sum()
+        scale = np.abs(wu).sum() + np.abs(wv).sum()
+        if total > 1e-9 * scale and total > 0.0:
+            wu /= total
+            wv /= total
+        else:  # nothing flows out yet: share by area
+            area = (self.ukind == ko).sum() * self.grid.area_x + (self.vkind == ko).sum() * self.grid.area_y
+            wu[:] = np.where(self.ukind == ko, self.grid.area_x / area, 0.0)
+            wv[:] = np.where(self.vkind == ko, self.grid.area_y / area, 0.0)
+
+    # ------------------------------------------------------------ initial state
+    def hydrostatic_pressure(self, t: float = 0.0) -> np.ndarray:
+        """(nx, ny) pressure [Pa] of gas at rest under gravity, in exact discrete balance.
+
+        Anchored at the prescribed pressure of the first ``PressureOutlet`` side (top
+        first), at its boundary-cell centres; without one, at ``reference_pressure`` in
+        the domain centre. Ideal gas: p = p_a exp(k·(x − x_a)), the exponential of
+        M g/(RT) as the staggered balance of eqs 43-44 gives it; constant density:
+        p = p_a + ρ g·(x − x_a).
+        """
+        gd = self.grid
+        X, Y = gd.centres()
+        sides = sorted(self._pressure_sides, key=lambda s: s[0] != "top")
+        if sides:
+            side, bc = sides[0]
+            p_a = self.props.reference_pressure if bc.pressure is None else evaluate(bc.pressure, t)
+            x_a, y_a = {"left": (-0.5 * gd.dx, 0.5 * gd.size[1]), "right": (gd.size[0] + 0.5 * gd.dx, 0.5 * gd.size[1]),
+                        "bottom": (0.5 * gd.size[0], -0.5 * gd.dy),
+                        "top": (0.5 * gd.size[0], gd.size[1] + 0.5 * gd.dy)}[side]
+        else:
+            p_a, x_a, y_a = self.props.reference_pressure, 0.5 * gd.size[0], 0.5 * gd.size[1]
+        gx, gy = self.gravity
+        if not self.props.ideal:
+            return p_a + self.props.density * (gx * (X - x_a) + gy * (Y - y_a))
+        f = self.props.compressibility
+
+        def rate(g, h):  # p_{+1}/p = (1 + g h f/2)/(1 - g h f/2) across one face
+            a = 0.5 * g * h * f
+            return math.log((1.0 + a) / (1.0 - a)) / h
+
+        return p_a * np.exp(rate(gx, gd.dx) * (X - x_a) + rate(gy, gd.dy) * (Y - y_a))
+
+    def initial_state(self, voidage=1.0, velocity=(0.0, 0.0), pressure=None, t: float = 0.0) -> GasState:
+        """A ``GasState`` that meets the boundary conditions at time ``t`` [s].
+
+        Parameters
+        ----------
+        voidage : float or (nx, ny) array
+            ε [-], in (0, 1].
+        velocity : (ux, uy) numbers or (u (nx+1, ny), v (nx, ny+1)) arrays
+            Interstitial gas velocity [m/s]; boundary faces are overwritten by the
+            boundary conditions (walls 0, inflow as prescribed).
+        pressure : None, float or (nx, ny) array
+            [Pa]; None: hydrostatic (``hydrostatic_pressure``).
+        """
+        gd = self.grid
+        eps = self._centre_array("voidage", voidage)
+        self._check_voidage(eps)
+        ux, uy = velocity
+        u = self._face_array("velocity[0]", ux, gd.u_shape, centre_ok=False).copy()
+        v = self._face_array("velocity[1]", uy, gd.v_shape, centre_ok=False).copy()
+        p = self.hydrostatic_pressure(t) if pressure is None else self._centre_array("pressure", pressure).copy()
+        if not np.all(p > 0.0) and self.props.ideal:
+            raise CaseError("gas initial pressure: must be > 0 [Pa] everywhere for the ideal gas")
+        self._set_boundary_values(t)
+        fixed_u, fixed_v = self.ukind == K.FIXED, self.vkind == K.FIXED
+        u[fixed_u] = self.ufix[fixed_u]
+        v[fixed_v] = self.vfix[fixed_v]
+        if self.periodic_x:
+            u[-1] = u[0]
+        if self.periodic_y:
+            v[:, -1] = v[:, 0]
+        return GasState(p=p, rho=self.props.density_at(p) * np.ones(gd.shape), u=u, v=v, voidage=eps.copy())
+
+    # ------------------------------------------------------------ input checks and conversions
+    def _centre_array(self, name, value):
+        a = np.asarray(value, float)
+        if a.ndim == 0:
+            return np.full(self.grid.shape, float(a))
+        if a.shape != self.grid.shape:
+            raise CaseError(f"gas {name}: shape {a.shape} does not match the cell-centre shape {self.grid.shape} "
+                            "(nx, ny)")
+        return a
+
+    def _face_array(self, name, value, shape, centre_ok=True, periodic=False, axis=0):
+        """A face array from a scalar, a face array of ``shape``, or (centre_ok) a centre array."""
+        a = np.asarray(value, float)
+        if a.ndim == 0:
+            return np.full(shape, float(a))
+        if a.shape == shape:
+            return a
+        if centre_ok and a.shape == self.grid.shape:
+            out = np.empty(shape)
+            (centre_to_x_faces if axis == 0 else centre_to_y_faces)(np.ascontiguousarray(a), periodic, out)
+            return out
+        allowed = f"{shape} (faces)" + (f" or {self.grid.shape} (cell centres)" if centre_ok else "")
+        raise CaseError(f"gas {name}: shape {a.shape} does not match {allowed}")
+
+    def _check_voidage(self, eps):
+        if not (np.all(eps > 0.0) and np.all(eps <= 1.0)):
+            bad = eps[~((eps > 0.0) & (eps <= 1.0))].ravel()[0]
+            raise CaseError(f"gas voidage: value {bad!r} outside (0, 1]")
+
+    def _faces_pair(self, name, value, centre_ok=True):
+        """(x-face array, y-face array) from None, a scalar, a centre array, or a pair of face arrays."""
+        gd = self.grid
+        if value is None:
+            return self._zero_u, self._zero_v
+        if isinstance(value, (tuple, list)) and len(value) == 2:
+            return (self._face_array(f"{name}[0]", value[0], gd.u_shape, centre_ok=False),
+                    self._face_array(f"{name}[1]", value[1], gd.v_shape, centre_ok=False))
+        return (self._face_array(name, value, gd.u_shape, centre_ok, self.periodic_x, 0),
+                self._face_array(name, value, gd.v_shape, centre_ok, self.periodic_y, 1))
+
+    def _check_state(self, state: GasState) -> None:
+        gd = self.grid
+        for key, shape in (("p", gd.shape), ("rho", gd.shape), ("voidage", gd.shape), ("u", gd.u_shape),
+                           ("v", gd.v_shape)):
+            a = getattr(state, key, None)
+            if not isinstance(a, np.ndarray) or a.shape != shape:
+                got = getattr(a, "shape", type(a).__name__)
+                raise CaseError(f"gas state.{key}: shape {got} does not match {shape}")
+
+    # ------------------------------------------------------------ time step
+    def advance(self, state: GasState, dt: float, t: float = 0.0, *, voidage=None, beta=None, solids_u=None,
+                solids_v=None, source_u=None, source_v=None) -> StepInfo:
+        """Advance ``state`` in place from time ``t`` to ``t + dt`` [s].
+
+        Parameters
+        ----------
+        state : GasState
+            Fields at time t; overwritten with those at t + dt.
+        dt : float
+            Time step [s] (Hoomans' DT).
+        t : float
+            Time at the start of the step [s]; boundary values are taken at t + dt.
+        voidage : None, float or (nx, ny) array
+            ε at t + dt [-] (Hoomans 1996 eqs 49-50 map it from the particles);
+            None keeps ``state.voidage``.
+        beta : None, float, (nx, ny) array, or (x-face array, y-face array)
+            Interphase momentum-transfer coefficient β ≥ 0 [kg m^-3 s^-1] (eqs 45-46),
+            treated implicitly. Centre values are averaged onto faces.
+        solids_u, solids_v : None, float, centre or face arrays
+            Solids velocity v in β(u − v) [m/s] (eq. 50).
+        source_u, source_v : None, float, centre or face arrays
+            Explicit momentum source added to the gas [N/m^3] (e.g. minus the drag handed
+            to the particles when that is how the coupling is done).
+
+        Returns
+        -------
+        StepInfo
+        """
+        gd, nx, ny = self.grid, self.grid.nx, self.grid.ny
+        if not (isinstance(dt, (int, float, np.floating)) and math.isfinite(dt) and dt > 0.0):
+            raise CaseError(f"gas time step dt = {dt!r}: must be > 0 [s]")
+        self._check_state(state)
+        eps_new = state.voidage if voidage is None else self._centre_array("voidage", voidage)
+        if voidage is not None:
+            self._check_voidage(eps_new)
+        beta_u, beta_v = self._faces_pair("beta", beta)
+        if beta is not None and not (beta_u.min() >= 0.0 and beta_v.min() >= 0.0 and np.isfinite(beta_u.max())
+                                     and np.isfinite(beta_v.max())):
+            raise CaseError("gas beta: must be finite and >= 0 [kg m^-3 s^-1]")
+        if isinstance(solids_u, (tuple, list)) or isinstance(solids_v, (tuple, list)):
+            raise CaseError("gas solids_u / solids_v: give one array each (faces or centres), not a pair")
+        rhs_u, rhs_v = self._rhs_u, self._rhs_v
+        rhs_u[:] = 0.0
+        rhs_v[:] = 0.0
+        if beta is not None:
+            if solids_u is not None:
+                rhs_u += beta_u * self._face_array("solids_u", solids_u, gd.u_shape, True, self.periodic_x, 0)
+            if solids_v is not None:
+                rhs_v += beta_v * self._face_array("solids_v", solids_v, gd.v_shape, True, self.periodic_y, 1)
+        if source_u is not None:
+            rhs_u += self._face_array("source_u", source_u, gd.u_shape, True, self.periodic_x, 0)
+        if source_v is not None:
+            rhs_v += self._face_array("source_v", source_v, gd.v_shape, True, self.periodic_y, 1)
+        beta_u, beta_v = np.ascontiguousarray(beta_u), np.ascontiguousarray(beta_v)
+
+        P, RHO, E, U, V = self.P, self.RHO, self.E, self.U, self.V
+        rf, rc = self._fpar[K.F_COMP], self._fpar[K.F_RHOC]
+        # old state: ghosts, donor mass fluxes, explicit convection and viscous terms
+        if t != self._bc_time:
+            self._set_boundary_values(t)
+        P[1:-1, 1:-1] = state.p
+        E[1:-1, 1:-1] = state.voidage
+        U[2:nx + 3, 2:ny + 2] = state.u
+        V[2:nx + 2, 2:ny + 3] = state.v
+        K.begin_step(U, V, P, RHO, E, self.G, self.H, self.flags, self.prule, self.pfix, self.erule, self.efix,
+                     rf, rc, self.props.viscosity, self._dxdy[0], self._dxdy[1], self._scheme, self.ukind, self.vkind,
+                     self.exu, self.exv, nx, ny)
+        ro_old = state.voidage * state.rho
+        if self.has_outflow:
+            self._outflow_weights(state.u, state.v)
+        # new voidage and boundary values at t + dt
+        E[1:-1, 1:-1] = eps_new
+        self._set_boundary_values(t + dt)
+        K.end_of_step_ghosts(P, RHO, E, self.flags, self.prule, self.pfix, self.erule, self.efix, rf, rc, nx, ny)
+
+        fpar, ipar, out = self._fpar, self._ipar, self._out
+        fpar[K.F_DT] = dt
+        ipar[K.I_ITER] = ipar[K.I_CHECKED] = ipar[K.I_REFACTORED] = ipar[K.I_RESUME] = 0
+        out[K.O_PREV] = math.inf
+        while True:
+            f = self._factors
+            status = K.iterate(U, V, P, RHO, E, ro_old, state.u, state.v, self.exu, self.exv, beta_u, beta_v, rhs_u,
+                               rhs_v, self.ukind, self.vkind, self.ufix, self.vfix, self.ubnd, self.vbnd, self.wout_u,
+                               self.wout_v, self.row_of, self.flags, self.prule, self.pfix, self.Du, self.Dv, self.R,
+                               self._dp, self._data, self._lu_data, self.diag_pos, self.upos, self.vpos, self.pin_pos,
+                               f[0], f[1], f[2], f[3], f[4], f[5], f[6], f[7], f[8], self._work_n, fpar, ipar, out)
+            if status == K.NEED_FACTORS:
+                self._factorise()
+                continue
+            break
+        if status == K.NOT_FINITE:
+            raise GasConvergenceError(f"gas solution not finite at t = {t + dt:.6g} s (dt = {dt:g} s); "
+                                      "reduce the time step (Courant number below 1)")
+        rel = float(out[K.O_REL])
+        mass = float(out[K.O_MASS])
+        state.p[...] = P[1:-1, 1:-1]
+        state.rho[...] = RHO[1:-1, 1:-1]
+        state.u[...] = U[2:nx + 3, 2:ny + 2]
+        state.v[...] = V[2:nx + 2, 2:ny + 3]
+        if voidage is not None:
+            state.voidage[...] = eps_new
+        return StepInfo(iterations=int(ipar[K.I_ITER]), mass_residual=rel, converged=rel <= self.tolerance,
+                        inflow_rate=float(out[K.O_IN]), outflow_rate=float(out[K.O_OUT]), mass=mass,
+                        mass_change_rate=float(out[K.O_ACC]), courant=float(out[K.O_COURANT]))
+
+    def _factorise(self) -> None:
+        """Factorise the assembled pressure-correction matrix (SuperLU) and keep its factors as CSC arrays
+        for the compiled triangular solves."""
+        n = self.grid.nx * self.grid.ny
+        A = sp.csc_matrix((self._data.copy(), self._indices, self._indptr), shape=(n, n))
+        lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A")
+        L = sp.tril(lu.L, k=-1, format="csc")
+        Uu = lu.U.tocsc()
+        Ud = Uu.diagonal().copy()
+        Us = sp.triu(Uu, k=1, format="csc")
+        self._factors = (L.indptr.astype(np.int64), L.indices.astype(np.int64), L.data.copy(),
+                         Us.indptr.astype(np.int64), Us.indices.astype(np.int64), Us.data.copy(), Ud,
+                         lu.perm_r.astype(np.int64), lu.perm_c.astype(np.int64))
+        self._lu_data[:] = self._data
+        self._ipar[K.I_HAVE_LU] = 1
+        self.factorisations += 1
+
+    # ------------------------------------------------------------ helpers
+    def max_time_step(self, state: GasState, courant: float = 0.5) -> float:
+        """Largest dt [s] of the explicit terms for ``state``: Courant number ``courant`` and
+        viscous number ν dt (2/dx² + 2/dy²) ≤ 1/2 (drag and pressure are implicit)."""
+        gd = self.grid
+        rate = np.abs(state.u).max() / gd.dx + np.abs(state.v).max() / gd.dy
+        nu = self.props.viscosity / max(float(state.rho.min()), 1e-300)
+        dt_c = courant / rate if rate > 0.0 else math.inf
+        dt_v = 0.5 / (nu * (2.0 / gd.dx**2 + 2.0 / gd.dy**2)) if nu > 0.0 else math.inf
+        return min(dt_c, dt_v)
+
+
+# ================================================================ benchmark
+def gas_step_benchmark(grids=((15, 25), (39, 60), (150, 300)), seconds: float = 2.0, convection: str = "upwind",
+                       verbose: bool = False) -> list[dict]:
+    """Wall time of one gas step on standard grids; rows for ``fluidem bench``.
+
+    The problem is the Hoomans 1996 single-orifice bed (Table 2 geometry 0.15 m ×
+    0.5 m, scaled to each grid): ideal gas, jet of 45 m/s interstitial in the centre
+    of the bottom (4.5 m/s elsewhere) through influx cells of voidage 0.4, no-slip
+    side walls, pressure outlet on top, a fixed bed of voidage 0.4 in the lower 0.2 m
+    with Ergun's β (eq. 45, d_p = 4 mm) recomputed from the gas velocity every step,
+    as a coupled run would. DT = 1e-4 s. The first steps (compilation, transient)
+    are not timed; then steps are timed for about ``seconds`` per grid.
+
+    Returns
+    -------
+    list of dict
+        One row per grid: problem, grid, cells, steps, ms_per_step, iterations_per_step,
+        factorisations_per_step.
+    """
+    rows = []
+    for nx, ny in grids:
+        solver, state, beta_of = _bench_problem(nx, ny, convection)
+        t, dt = 0.0, 1e-4
+        for _ in range(3):
+            solver.advance(state, dt, t, beta=beta_of(state), solids_u=0.0, solids_v=0.0)
+            t += dt
+        n, its, fac0, elapsed, wall0 = 0, 0, solver.factorisations, 0.0, time.perf_counter()
+        while (time.perf_counter() - wall0 < seconds or n < 3) and n < 100000:
+            beta = beta_of(state)  # the coupling's work, not timed
+            t0 = time.perf_counter()
+            info = solver.advance(state, dt, t, beta=beta, solids_u=0.0, solids_v=0.0)
+            elapsed += time.perf_counter() - t0
+            t += dt
+            n += 1
+            its += info.iterations
+        row = {"problem": f"gas step, jet bed ({convection})", "grid": f"{nx}x{ny}", "cells": nx * ny, "steps": n,
+               "ms_per_step": 1e3 * elapsed / n, "iterations_per_step": its / n,
+               "factorisations_per_step": (solver.factorisations - fac0) / n}
+        rows.append(row)
+        if verbose:
+            print(f"{row['grid']:>8}  {row['ms_per_step']:9.3f} ms/step  {row['iterations_per_step']:.2f} it/step  "
+                  f"{row['factorisations_per_step']:.2f} LU/step", flush=True)
+    return rows
+
+
+def _bench_problem(nx: int, ny: int, convection: str = "upwind"):
+    """Solver, state and β(state) of the benchmark bed on an nx × ny grid."""
+    from .boundaries import Segment, Wall
+
+    grid = StaggeredGrid(cells=(nx, ny), size=(0.15, 0.5), depth=0.004)
+    props = GasProperties()
+    jet = (0.07, 0.08)
+    bcs = {"left": Wall(), "right": Wall(), "top": PressureOutlet(pressure=101325.0),
+           "bottom": Inflow(segments=(Segment(interstitial=4.5), Segment(interstitial=45.0, start=jet[0], end=jet[1])),
+                            voidage=0.4)}
+    solver = GasSolver(grid, props, bcs, convection=convection)
+    _, Y = grid.centres()
+    eps = np.where(Y < 0.2, 0.4, 1.0)
+    state = solver.initial_state(voidage=eps)
+    d_p = 4e-3
+    mu = props.viscosity
+
+    def beta_of(st: GasState) -> np.ndarray:
+        uc = 0.5 * (st.u[1:] + st.u[:-1])
+        vc = 0.5 * (st.v[:, 1:] + st.v[:, :-1])
+        slip = np.hypot(uc, vc)
+        e = st.voidage
+        # Hoomans 1996 eq. 45 (Ergun) in the bed; no particles above it
+        b = 150.0 * (1 - e) ** 2 / e * mu / d_p**2 + 1.75 * (1 - e) * st.rho / d_p * slip
+        return np.where(e < 0.8, b, 0.0)
+
+    return solver, state, beta_of
+
+
+__all__ = ["GasProperties", "GasState", "GasSolver", "StepInfo", "GasConvergenceError", "gas_step_benchmark",
+           "GAS_CONSTANT"]

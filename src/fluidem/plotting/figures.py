@@ -1,0 +1,504 @@
+"""The figures of one run, each a registered ``FigureSpec``: what it needs and how it is drawn.
+
+A spec says why a run cannot have the figure (``lacks(run) -> str | None``, a one-line
+reason such as "the run has no probes.csv") and draws it (``draw(run, options) ->
+Figure``). ``render`` walks the registry in order and yields a figure or the reason it
+was skipped; ``plot_run`` writes them. A new quantity (gas voidage maps, pressure
+probes, segregation indices) is one more decorated function here, nothing else.
+
+Registered today: ``snapshots`` (particles at chosen times, Hoomans et al. 1996 Figs
+8/10/12), ``energy`` (budget against time, Hoomans Fig 9), ``contacts`` (coordination
+number and contacts, Sun et al. 2007), ``bed_height`` (mean particle height, Sun 2007),
+``pressure`` (probe columns ending ``_Pa``; present once the gas solver writes them).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from ..errors import CaseError
+from ..registry import Registry
+from . import style
+from .run import RunData, Unavailable
+
+COLOR_MODES = ("height", "speed", "species")
+DEFAULT_PANELS = 4
+
+
+@dataclass
+class PlotOptions:
+    """Choices shared by the figures.
+
+    times : snapshot times [s] to draw (nearest snapshot each); None: ``DEFAULT_PANELS``
+        evenly spaced, first and last included.
+    color : "height" (band of initial height), "speed" (|v| [m/s]) or "species".
+    bands : number of initial-height bands.
+    """
+
+    times: list[float] | None = None
+    color: str = "height"
+    bands: int = 6
+
+    def __post_init__(self):
+        if self.color not in COLOR_MODES:
+            raise CaseError(f"--color {self.color!r}: allowed are {', '.join(COLOR_MODES)}")
+        if int(self.bands) < 1:
+            raise CaseError(f"--bands {self.bands}: give a whole number of at least 1")
+
+
+@dataclass(frozen=True)
+class FigureSpec:
+    name: str
+    description: str
+    lacks: Callable[[RunData], str | None]
+    draw: Callable[[RunData, PlotOptions], object]
+    stem: Callable[[PlotOptions], str] | None = None
+
+    def file_stem(self, options: PlotOptions) -> str:
+        return self.stem(options) if self.stem else self.name
+
+
+figures: Registry[FigureSpec] = Registry("figure")
+
+
+def figure(name: str, description: str, lacks: Callable[[RunData], str | None], stem=None):
+    """Register the decorated ``draw(run, options) -> Figure`` as figure ``name``."""
+
+    def deco(draw):
+        figures.register(name)(FigureSpec(name, description, lacks, draw, stem))
+        return draw
+
+    return deco
+
+
+@dataclass
+class PlotResult:
+    written: list[Path] = field(default_factory=list)
+    skipped: list[tuple[str, str]] = field(default_factory=list)  # (figure name, reason)
+
+
+def parse_names(text: str | None) -> list[str] | None:
+    """``"energy,contacts"`` → the names, checked against the registry (CaseError otherwise)."""
+    if text is None:
+        return None
+    names = [n.strip() for n in str(text).split(",") if n.strip()]
+    for n in names:
+        if n not in figures:
+            try:
+                figures.get(n)
+            except KeyError as err:
+                raise CaseError(f"--only: {err.args[0]}") from None
+    return names
+
+
+def render(run: RunData, options: PlotOptions, only: list[str] | None = None):
+    """Yield (spec, figure or None, reason or None) for every registered figure, in order."""
+    for name, spec in figures.items():
+        if only is not None and name not in only:
+            continue
+        why = spec.lacks(run)
+        if why is None:
+            try:
+                yield spec, spec.draw(run, options), None
+                continue
+            except Unavailable as err:
+                why = str(err)
+        yield spec, None, why
+
+
+def plot_run(run: RunData, out_dir: Path, options: PlotOptions | None = None, formats=("png",),
+             only: list[str] | None = None) -> PlotResult:
+    """Write every figure that applies to ``run`` into ``out_dir``; the others are listed as skipped."""
+    options = options or PlotOptions()
+    if options.times is not None and run.lacks_snapshots() is None:
+        select_snapshots(run.snapshot_times, options.times)  # bad --times: error before anything is written
+    result = PlotResult()
+    out_dir = Path(out_dir)
+    with style.context():
+        for spec, fig, why in render(run, options, only):
+            if fig is None:
+                result.skipped.append((spec.name, why))
+                continue
+            try:
+                out_dir.mkdir(parents=True, exist_ok=True)
+            except OSError as err:
+                raise CaseError(f"--out {str(out_dir)!r}: cannot create the folder: {err.strerror or err}") from None
+            result.written += style.save(fig, out_dir / spec.file_stem(options), list(formats))
+    return result
+
+
+# ---------------------------------------------------------------- snapshot selection
+def parse_times(text: str | None) -> list[float] | None:
+    """``"0,0.5,1"`` → [0.0, 0.5, 1.0]; CaseError naming an item that is not a number."""
+    if text is None:
+        return None
+    out = []
+    for item in str(text).split(","):
+        if not item.strip():
+            continue
+        try:
+            t = float(item)
+        except ValueError:
+            raise CaseError(f"--times {item.strip()!r}: not a number; give seconds separated by commas, "
+                            f"e.g. --times 0,0.5,1.0") from None
+        if not np.isfinite(t):
+            raise CaseError(f"--times {item.strip()!r}: give finite times in seconds")
+        out.append(t)
+    if not out:
+        raise CaseError(f"--times {text!r}: give at least one time in seconds")
+    return out
+
+
+def select_snapshots(available: np.ndarray, requested: list[float] | None,
+                     count: int = DEFAULT_PANELS) -> list[int]:
+    """Indices of the snapshots to draw.
+
+    ``requested=None``: ``count`` evenly spaced, first and last included. Otherwise the
+    nearest snapshot to each requested time, in the order given, without repeats; a time
+    further than half a snapshot interval outside the run is a CaseError.
+    """
+    available = np.asarray(available, float)
+    n = len(available)
+    if requested is None:
+        if n <= count:
+            return list(range(n))
+        return sorted({int(round(k)) for k in np.linspace(0, n - 1, count)})
+    gaps = np.diff(available)
+    tol = 0.5 * float(np.median(gaps)) if n > 1 else 0.0
+    tol = max(tol, 1e-9 * max(abs(available[-1]), 1.0))
+    out: list[int] = []
+    for t in requested:
+        if t < available[0] - tol or t > available[-1] + tol:
+            raise CaseError(f"--times {t:g}: outside the snapshots of this run, which run from "
+                            f"{available[0]:g} s to {available[-1]:g} s ({n} snapshots)")
+        k = int(np.argmin(np.abs(available - t)))
+        if k not in out:
+            out.append(k)
+    return out
+
+
+# ---------------------------------------------------------------- projection
+@dataclass
+class View:
+    """How particle positions map onto a figure: the horizontal and vertical axes (0, 1, 2 for
+    x, y, z), the depth axis projected away (3D only), and the drawing limits [m]."""
+
+    horizontal: int
+    vertical: int
+    depth: int | None
+    up_sign: float
+    xlim: tuple[float, float]
+    ylim: tuple[float, float]
+    floor: float  # vertical coordinate of the floor [m] (lowest box bottom, else 0)
+    walls: list[np.ndarray]  # polylines (k, 2) in figure coordinates [m]
+
+    def project(self, position: np.ndarray) -> np.ndarray:
+        """(N, 3) positions → (N, 2) figure coordinates [m]."""
+        return np.column_stack([position[:, self.horizontal], self.up_sign * position[:, self.vertical]])
+
+    def height(self, position: np.ndarray) -> np.ndarray:
+        """Height above the floor [m], (N,)."""
+        return self.up_sign * position[:, self.vertical] - self.floor
+
+    @property
+    def aspect(self) -> float:
+        return (self.xlim[1] - self.xlim[0]) / (self.ylim[1] - self.ylim[0])
+
+    def axis_label(self, k: int) -> str:
+        name = "xyz"[k]
+        return f"{'−' if (k == self.vertical and self.up_sign < 0) else ''}{name} [m]"
+
+
+def view_of(run: RunData, first: dict | None = None) -> View:
+    """The projection for ``run``: 2D runs are drawn in their x–y plane; 3D runs are projected
+    onto the plane of gravity and the wider horizontal axis (the depth axis is dropped)."""
+    g = run.gravity
+    plane = [0, 1] if run.dimensions == 2 else [0, 1, 2]
+    gp = np.array([abs(g[k]) for k in plane])
+    vertical = plane[int(np.argmax(gp))] if gp.max() > 0 else plane[-1]
+    up_sign = -1.0 if g[vertical] > 0 else 1.0
+    rest = [k for k in plane if k != vertical]
+    boxes = run.boxes()
+    pos = first["position"] if first is not None else None
+    diam = float(np.max(first["diameter"])) if first is not None and len(first["diameter"]) else 0.0
+    depth = None
+    if len(rest) == 1:
+        horizontal = rest[0]
+    else:
+        if boxes:
+            lo = np.min([b["lower"] for b in boxes], axis=0)
+            hi = np.max([b["upper"] for b in boxes], axis=0)
+            extent = hi - lo
+        elif pos is not None and len(pos):
+            extent = np.ptp(pos, axis=0)
+        else:
+            extent = np.ones(3)
+        horizontal = rest[0] if extent[rest[0]] >= extent[rest[1]] else rest[1]
+        depth = rest[1] if horizontal == rest[0] else rest[0]
+    walls = []
+    xs, ys = [], []
+    floor = None
+    for b in boxes:
+        x0, x1 = b["lower"][horizontal], b["upper"][horizontal]
+        y0, y1 = sorted((up_sign * b["lower"][vertical], up_sign * b["upper"][vertical]))
+        pts = [(x0, y1), (x0, y0), (x1, y0), (x1, y1)]
+        if not b["open_top"]:
+            pts.append((x0, y1))
+        walls.append(np.array(pts))
+        xs += [x0, x1]
+        ys += [y0, y1]
+        floor = y0 if floor is None else min(floor, y0)
+    if pos is not None and len(pos):
+        xy = np.column_stack([pos[:, horizontal], up_sign * pos[:, vertical]])
+        xs += [xy[:, 0].min() - diam, xy[:, 0].max() + diam]
+        ys += [xy[:, 1].min() - diam, xy[:, 1].max() + diam]
+    if not xs:
+        xs, ys = [0.0, 1.0], [0.0, 1.0]
+    span = max(max(xs) - min(xs), max(ys) - min(ys), 1e-12)
+    pad = 0.02 * span
+    return View(horizontal, vertical, depth, up_sign, (min(xs) - pad, max(xs) + pad),
+                (min(ys) - pad, max(ys) + pad), 0.0 if floor is None else floor, walls)
+
+
+# ---------------------------------------------------------------- particle colours
+class Colourer:
+    """Face colours of the particles of a snapshot for one colour mode, plus its legend or colour bar."""
+
+    def __init__(self, mode: str, run: RunData, view: View, first: dict, bands: int = 6,
+                 speed_max: float | None = None):
+        self.mode = mode
+        self.run = run
+        if mode == "height":
+            h = view.height(first["position"])
+            lo, hi = float(h.min()), float(h.max())
+            band = np.floor((h - lo) / max(hi - lo, 1e-300) * bands).astype(np.int64)
+            band = np.clip(band, 0, bands - 1)
+            order = np.argsort(first["id"])
+            self._ids = np.asarray(first["id"])[order]
+            self._band = band[order]
+            self.bands = bands
+            self.first_time = first["time"]
+        elif mode == "speed":
+            from matplotlib.colors import Normalize
+
+            self.norm = Normalize(0.0, max(speed_max or 0.0, 1e-12))
+            import matplotlib
+
+            self.cmap = matplotlib.colormaps[style.SPEED_COLOURMAP]
+
+    def colours(self, snap: dict) -> np.ndarray:
+        from matplotlib.colors import to_rgba_array
+
+        n = len(snap["diameter"])
+        if self.mode == "height":
+            ids = np.asarray(snap["id"])
+            k = np.clip(np.searchsorted(self._ids, ids), 0, max(len(self._ids) - 1, 0))
+            found = self._ids[k] == ids if len(self._ids) else np.zeros(n, bool)
+            pal = to_rgba_array(list(style.BAND_COLOURS) + [style.UNBANDED_COLOUR])
+            idx = np.where(found, self._band[k] % 2, 2)
+            return pal[idx]
+        if self.mode == "speed":
+            speed = np.linalg.norm(snap["velocity"], axis=1)
+            return self.cmap(self.norm(speed))
+        pal = to_rgba_array(style.LINE_COLOURS)
+        return pal[np.asarray(snap["species"], np.int64) % len(pal)]
+
+    def decorate(self, fig, axes, snaps) -> None:
+        """Colour bar (speed), legend (species) or a note on the bands (height)."""
+        from matplotlib.cm import ScalarMappable
+        from matplotlib.patches import Patch
+
+        if self.mode == "speed":
+            fig.colorbar(ScalarMappable(self.norm, self.cmap), ax=axes, label="speed |v| [m/s]", shrink=0.8)
+        elif self.mode == "species":
+            names = self.run.species_names
+            present = sorted({int(s) for snap in snaps for s in np.unique(snap["species"])})
+            handles = [Patch(facecolor=style.LINE_COLOURS[s % len(style.LINE_COLOURS)], edgecolor="k",
+                             label=names[s] if s < len(names) else f"species {s}") for s in present]
+            fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), 4))
+        else:
+            fig.suptitle(f"colour: band of initial height ({self.bands} bands at t = {self.first_time:.3g} s)",
+                         fontsize=style.RC["font.size"])
+
+
+def speed_max(run: RunData, indices: list[int] | None = None) -> float:
+    vmax = 0.0
+    for k, (_, snap) in enumerate(run.iter_snapshots(("velocity",))):
+        if (indices is None or k in indices) and "velocity" in snap and len(snap["velocity"]):
+            vmax = max(vmax, float(np.max(np.linalg.norm(snap["velocity"], axis=1))))
+    return vmax
+
+
+def draw_particles(ax, view: View, snap: dict, colours: np.ndarray):
+    """Particles as circles of their true diameter (data units); returns the collection.
+
+    3D runs: nearer particles (smaller depth coordinate) are drawn over farther ones.
+    """
+    from matplotlib.collections import EllipseCollection
+
+    xy = view.project(snap["position"])
+    d = np.asarray(snap["diameter"], float)
+    order = np.argsort(-snap["position"][:, view.depth]) if view.depth is not None else slice(None)
+    n = len(d)
+    coll = EllipseCollection(d[order], d[order], np.zeros(n), units="xy", offsets=xy[order],
+                             offset_transform=ax.transData, facecolors=colours[order],
+                             edgecolors="#202020" if n <= 5000 else "none", linewidths=0.25)
+    ax.add_collection(coll)
+    return coll
+
+
+def setup_particle_axes(ax, view: View, first_panel: bool = True) -> None:
+    for line in view.walls:
+        ax.plot(line[:, 0], line[:, 1], color=style.WALL_COLOUR, lw=1.2, solid_capstyle="butt")
+    ax.set_xlim(*view.xlim)
+    ax.set_ylim(*view.ylim)
+    ax.set_aspect("equal")
+    ax.grid(False)
+    ax.set_xlabel(view.axis_label(view.horizontal))
+    if first_panel:
+        ax.set_ylabel(view.axis_label(view.vertical))
+
+
+def _time_title(t: float) -> str:
+    return f"t = {t:.3f} s" if abs(t) >= 1e-3 or t == 0 else f"t = {t:.3g} s"
+
+
+@figure("snapshots", "particles at chosen times, coloured by initial height band, speed or species "
+                     "(Hoomans et al. 1996 Figs 8/10/12)",
+        lacks=lambda run: run.lacks_snapshots(), stem=lambda o: f"snapshots_{o.color}")
+def draw_snapshots(run: RunData, options: PlotOptions):
+    indices = select_snapshots(run.snapshot_times, options.times)
+    first = run.snapshot(0)
+    snaps = [first if k == 0 else run.snapshot(k) for k in indices]
+    view = view_of(run, first)
+    vmax = speed_max(run, indices) if options.color == "speed" else None
+    colourer = Colourer(options.color, run, view, first, options.bands, vmax)
+    n = len(snaps)
+    panel_w = float(np.clip(style.PANEL_HEIGHT_IN * view.aspect, 1.3, 8.0))
+    extra = 1.1 if options.color == "speed" else 0.5
+    fig = style.new_figure(n * panel_w + extra, style.PANEL_HEIGHT_IN + 0.8)
+    axes = fig.subplots(1, n, sharey=True, squeeze=False)[0]
+    for i, (ax, snap) in enumerate(zip(axes, snaps)):
+        setup_particle_axes(ax, view, first_panel=(i == 0))
+        draw_particles(ax, view, snap, colourer.colours(snap))
+        ax.set_title(_time_title(snap["time"]))
+    colourer.decorate(fig, list(axes), snaps)
+    return fig
+
+
+# ---------------------------------------------------------------- time traces
+def _trace_axes(nrows: int = 1):
+    w, h = style.TRACE_SIZE_IN
+    fig = style.new_figure(w, h if nrows == 1 else 0.6 * h * nrows + 0.6)
+    axes = fig.subplots(nrows, 1, sharex=True, squeeze=False)[:, 0]
+    axes[-1].set_xlabel(style.label("time_s"))
+    return fig, axes
+
+
+@figure("energy", "kinetic, rotational and potential energy (relative to its final value) and their sum "
+                  "against time (Hoomans et al. 1996 Fig 9)",
+        lacks=lambda run: run.lacks_probes("kinetic_J", "potential_J"))
+def draw_energy(run: RunData, options: PlotOptions):
+    p = run.probes
+    t = p["time_s"]
+    kinetic = p["kinetic_J"]
+    rotational = p.get("rotational_J", np.zeros_like(t))
+    pe = p["potential_J"]
+    finite = np.flatnonzero(np.isfinite(pe))
+    pe_rel = pe - (pe[finite[-1]] if len(finite) else 0.0)
+    fig, (ax,) = _trace_axes()
+    ax.plot(t, kinetic, label="kinetic")
+    ax.plot(t, rotational, label="rotational")
+    ax.plot(t, pe_rel, label="potential − final potential")
+    ax.plot(t, kinetic + rotational + pe_rel, color="k", lw=1.8, label="sum")
+    ax.set_ylabel("energy [J]")
+    ax.set_title("energy budget")
+    ax.legend(loc="best")
+    return fig
+
+
+@figure("contacts", "coordination number and number of contacts against time (Sun et al. 2007)",
+        lacks=lambda run: run.lacks_probes("coordination", "contacts", "wall_contacts", any_of=True))
+def draw_contacts(run: RunData, options: PlotOptions):
+    p = run.probes
+    t = p["time_s"]
+    rows = [["coordination"]] if "coordination" in p else []
+    counts = [c for c in ("contacts", "wall_contacts") if c in p]
+    if counts:
+        rows.append(counts)
+    fig, axes = _trace_axes(len(rows))
+    for ax, cols in zip(axes, rows):
+        for c in cols:
+            ax.plot(t, p[c], label=style.label(c).split(" [")[0])
+        ax.set_ylabel(style.label(cols[0]) if len(cols) == 1 else "contacts [–]")
+        if len(cols) > 1:
+            ax.legend(loc="best")
+    axes[0].set_title("contacts")
+    return fig
+
+
+BED_HEIGHT_COLUMNS = ("mean_bed_height_m", "bed_height_m")
+
+
+def _lacks_bed_height(run: RunData) -> str | None:
+    if run.lacks_probes(*BED_HEIGHT_COLUMNS, any_of=True) is None:
+        return None
+    why = run.lacks_snapshots()
+    if why is None and len(run.snapshot_times) < 2:
+        why = "the run has a single snapshot"
+    return None if why is None else f"no bed-height probe and {why}"
+
+
+@figure("bed_height", "mean particle height above the floor against time (Sun et al. 2007)",
+        lacks=_lacks_bed_height)
+def draw_bed_height(run: RunData, options: PlotOptions):
+    fig, (ax,) = _trace_axes()
+    if run.lacks_probes(*BED_HEIGHT_COLUMNS, any_of=True) is None:
+        p = run.probes
+        for c in BED_HEIGHT_COLUMNS:
+            if c in p:
+                ax.plot(p["time_s"], p[c], label=style.label(c).split(" [")[0] + " (probes)")
+        ylabel = style.label(next(c for c in BED_HEIGHT_COLUMNS if c in p))
+    else:
+        first = run.snapshot(0)
+        view = view_of(run, first)
+        t, h = [], []
+        for time, snap in run.iter_snapshots(("position",)):
+            if "position" in snap and len(snap["position"]):
+                t.append(time)
+                h.append(float(np.mean(view.height(snap["position"]))))
+        ax.plot(t, h, marker="o", ms=3, label="mean particle height (snapshots)")
+        ylabel = "mean particle height [m]"
+    ax.set_ylabel(ylabel)
+    ax.set_title("bed height")
+    ax.legend(loc="best")
+    return fig
+
+
+def _pressure_columns(run: RunData) -> list[str]:
+    return [c for c in run.probe_columns() if c.endswith("_Pa")]
+
+
+def _lacks_pressure(run: RunData) -> str | None:
+    why = run.lacks_probes()
+    if why is None and not _pressure_columns(run):
+        why = "probes.csv has no pressure columns (*_Pa); runs with a gas solver write them"
+    return why
+
+
+@figure("pressure", "gas pressure probes against time (Hoomans et al. 1996 Figs 11 and 13)",
+        lacks=_lacks_pressure)
+def draw_pressure(run: RunData, options: PlotOptions):
+    p = run.probes
+    fig, (ax,) = _trace_axes()
+    cols = _pressure_columns(run)
+    for c in cols:
+        ax.plot(p["time_s"], p[c], label=style.label(c).split(" [")[0])
+    ax.set_ylabel("pressure [Pa]")
+    ax.set_title("pressure")
+    if len(cols) > 1:
+        ax.legend(loc="best")
+    return fig

@@ -1,0 +1,233 @@
+"""Read a run directory for plotting: case, summary, probes and particle snapshots.
+
+``RunData(path)`` checks that ``path`` is a run directory (it holds ``case.toml``) and
+raises ``CaseError`` otherwise. Everything else is optional: a quantity the run lacks
+(no ``probes.csv``, no ``particles.h5``, a column that is not there) is reported by
+``RunData.lacks_*`` as a one-line reason, so figures skip with a note instead of failing.
+Readers only read; nothing in the run directory is changed.
+"""
+from __future__ import annotations
+
+import csv
+import json
+import math
+import tomllib
+from functools import cached_property
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import CaseError
+
+CASE_FILE = "case.toml"
+SUMMARY_FILE = "summary.json"
+PROBES_FILE = "probes.csv"
+SNAPSHOT_FILE = "particles.h5"
+
+
+class Unavailable(Exception):
+    """A quantity the run does not have (or cannot be read); the message is a one-line reason."""
+
+
+class RunData:
+    """Read-only view of one run directory.
+
+    Parameters
+    ----------
+    path : the run directory (``fluidem run --out DIR``).
+
+    Raises
+    ------
+    CaseError : ``path`` does not exist, is not a folder, or has no readable ``case.toml``.
+    """
+
+    def __init__(self, path: str | Path):
+        self.path = Path(path)
+        if not self.path.exists():
+            raise CaseError(f"run directory {str(path)!r} does not exist")
+        if not self.path.is_dir():
+            raise CaseError(f"{str(path)!r} is not a run directory (it is a file); give the folder of a run")
+        case_file = self.path / CASE_FILE
+        if not case_file.is_file():
+            raise CaseError(f"{str(path)!r} is not a run directory: it has no {CASE_FILE} "
+                            f"(made by `fluidem run CASE --out DIR`)")
+        try:
+            self.case_text = case_file.read_text()
+            self.case = tomllib.loads(self.case_text)
+        except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as err:
+            raise CaseError(f"{str(case_file)!r} cannot be read: {err}") from None
+
+    # ------------------------------------------------------------ identity
+    @property
+    def name(self) -> str:
+        """Label of the run in legends and tables: the folder name."""
+        return self.path.resolve().name or str(self.path)
+
+    @property
+    def case_name(self) -> str:
+        return str(self.case.get("name", ""))
+
+    @property
+    def dimensions(self) -> int:
+        return int(self.case.get("particles", {}).get("dimensions", 3))
+
+    @property
+    def gravity(self) -> np.ndarray:
+        g = self.case.get("gravity")
+        if g is None:  # the schema's default
+            g = (0.0, -9.81, 0.0) if self.dimensions == 2 else (0.0, 0.0, -9.81)
+        return np.asarray(g, float)
+
+    @property
+    def species_names(self) -> list[str]:
+        return [str(s.get("name", f"species {k}")) for k, s in enumerate(self.case.get("particles", {}).get("species", []))]
+
+    def boxes(self) -> list[dict]:
+        """Box walls as dicts: ``lower`` [m] (3,), ``upper`` [m] (3,), ``open_top``, ``name``."""
+        out = []
+        for w in self.case.get("walls", []):
+            if w.get("kind") == "box" and w.get("lower") is not None and w.get("upper") is not None:
+                out.append({"lower": np.asarray(w["lower"], float), "upper": np.asarray(w["upper"], float),
+                            "open_top": bool(w.get("open_top", False)), "name": str(w.get("name", "box"))})
+        return out
+
+    # ------------------------------------------------------------ summary
+    @cached_property
+    def summary(self) -> dict | None:
+        """``summary.json`` as a dict, or None when missing or unreadable."""
+        try:
+            data = json.loads((self.path / SUMMARY_FILE).read_text())
+        except (OSError, ValueError):
+            return None
+        return data if isinstance(data, dict) else None
+
+    # ------------------------------------------------------------ probes
+    @cached_property
+    def _probes(self) -> tuple[dict[str, np.ndarray] | None, str | None]:
+        path = self.path / PROBES_FILE
+        if not path.is_file():
+            return None, f"the run has no {PROBES_FILE}"
+        try:
+            with open(path, newline="") as f:
+                rows = [r for r in csv.reader(f) if r]
+        except (OSError, UnicodeDecodeError, csv.Error) as err:
+            return None, f"{PROBES_FILE} cannot be read: {err}"
+        if not rows:
+            return None, f"{PROBES_FILE} is empty"
+        header, body = rows[0], rows[1:]
+        cols: dict[str, np.ndarray] = {}
+        for k, name in enumerate(header):
+            vals = np.full(len(body), math.nan)
+            for i, r in enumerate(body):
+                try:
+                    vals[i] = float(r[k])
+                except (IndexError, ValueError):
+                    pass
+            cols[name.strip()] = vals
+        return cols, None
+
+    @property
+    def probes(self) -> dict[str, np.ndarray]:
+        """Columns of ``probes.csv`` as float arrays (unparsable cells are NaN); raises ``Unavailable``."""
+        cols, why = self._probes
+        if cols is None:
+            raise Unavailable(why)
+        return cols
+
+    def probe_columns(self) -> list[str]:
+        cols, _ = self._probes
+        return list(cols) if cols else []
+
+    def lacks_probes(self, *columns: str, any_of: bool = False, min_rows: int = 2) -> str | None:
+        """Why the run cannot give a trace of ``columns`` against time (None when it can).
+
+        With ``any_of=True`` one of ``columns`` is enough.
+        """
+        cols, why = self._probes
+        if cols is None:
+            return why
+        if "time_s" not in cols:
+            return f"{PROBES_FILE} has no time_s column"
+        if len(cols["time_s"]) < min_rows:
+            return f"{PROBES_FILE} has {len(cols['time_s'])} row(s); a trace needs {min_rows}"
+        present = [c for c in columns if c in cols]
+        if any_of and not present and columns:
+            return f"{PROBES_FILE} has none of the columns {', '.join(columns)}"
+        missing = [c for c in columns if c not in cols]
+        if not any_of and missing:
+            return f"{PROBES_FILE} has no column {', '.join(missing)}"
+        return None
+
+    # ------------------------------------------------------------ snapshots
+    @cached_property
+    def _snapshot_index(self) -> tuple[list[tuple[str, float]] | None, str | None]:
+        path = self.path / SNAPSHOT_FILE
+        if not path.is_file():
+            return None, f"the run has no particle snapshots ({SNAPSHOT_FILE})"
+        try:
+            import h5py
+
+            with h5py.File(path, "r") as f:
+                grp = f.get("snapshots")
+                if grp is None:
+                    return None, f"{SNAPSHOT_FILE} has no /snapshots group"
+                index = [(k, float(grp[k].attrs["time"])) for k in sorted(grp)]
+        except (OSError, KeyError, ValueError) as err:
+            return None, f"{SNAPSHOT_FILE} cannot be read: {err}"
+        if not index:
+            return None, f"{SNAPSHOT_FILE} holds no snapshots"
+        return index, None
+
+    def lacks_snapshots(self) -> str | None:
+        return self._snapshot_index[1]
+
+    @property
+    def snapshot_times(self) -> np.ndarray:
+        """Times [s] of the snapshots, in order; raises ``Unavailable``."""
+        index, why = self._snapshot_index
+        if index is None:
+            raise Unavailable(why)
+        return np.array([t for _, t in index])
+
+    def snapshot(self, k: int) -> dict[str, np.ndarray]:
+        """Snapshot ``k`` (negative counts from the end): arrays by name plus ``time`` [s].
+
+        ``position`` (N, 3) [m], ``velocity`` (N, 3) [m/s], ``diameter`` (N,) [m],
+        ``species`` (N,) and ``id`` (N,); ``id`` defaults to 0..N-1 and ``species`` to 0.
+        """
+        index, why = self._snapshot_index
+        if index is None:
+            raise Unavailable(why)
+        key, t = index[k]
+        try:
+            import h5py
+
+            with h5py.File(self.path / SNAPSHOT_FILE, "r") as f:
+                g = f["snapshots"][key]
+                out = {name: np.asarray(g[name]) for name in g}
+        except (OSError, KeyError, ValueError) as err:
+            raise Unavailable(f"{SNAPSHOT_FILE} snapshot {key} cannot be read: {err}") from None
+        if "position" not in out or "diameter" not in out:
+            raise Unavailable(f"{SNAPSHOT_FILE} snapshot {key} has no position or diameter")
+        n = out["position"].shape[0]
+        out.setdefault("id", np.arange(n))
+        out.setdefault("species", np.zeros(n, np.int32))
+        out.setdefault("velocity", np.zeros((n, 3)))
+        out["time"] = t
+        return out
+
+    def iter_snapshots(self, fields: tuple[str, ...] = ("position",)):
+        """Yield (time [s], {field: array}) for every snapshot, opening the file once."""
+        index, why = self._snapshot_index
+        if index is None:
+            raise Unavailable(why)
+        try:
+            import h5py
+
+            with h5py.File(self.path / SNAPSHOT_FILE, "r") as f:
+                grp = f["snapshots"]
+                for key, t in index:
+                    g = grp[key]
+                    yield t, {name: np.asarray(g[name]) for name in fields if name in g}
+        except (OSError, KeyError, ValueError) as err:
+            raise Unavailable(f"{SNAPSHOT_FILE} cannot be read: {err}") from None

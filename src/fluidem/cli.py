@@ -112,6 +112,10 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--steps", type=int, default=0, help="timed steps per problem (default: about 5 s of work)")
     b.add_argument("--json", metavar="FILE", help="also write the results as JSON")
     b.set_defaults(func=cmd_bench)
+
+    from .cli_plot import add_commands
+
+    add_commands(sub)
     return p
 
 

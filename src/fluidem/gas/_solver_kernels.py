@@ -7,9 +7,18 @@ at ``[i + 2, j + 2]``; ``V`` ``(nx + 4, ny + 5)`` with y-face (i, j) at ``[i + 2
 Boundary behaviour comes only from the integer cell flags (Hoomans 1996 Table 1) and
 the face kinds derived from them at set-up.
 
-Symbols inside kernels: ``E`` voidage ε, ``RHO`` gas density ρ_g, ``P`` pressure,
-``G``/``H`` mass flux densities (ερ)_donor u, (ερ)_donor v [kg m^-2 s^-1], ``beta``
-the interphase momentum-transfer coefficient β [kg m^-3 s^-1].
+Symbols inside kernels: ``E`` voidage ε, ``RHO`` gas density ρ_g, ``P`` pressure relative to
+the reference pressure p_ref (so that small differences of a large pressure keep their digits),
+``G``/``H`` mass flux densities (ερ)_f u, (ερ)_f v [kg m^-2 s^-1], ``beta`` the interphase
+momentum-transfer coefficient β [kg m^-3 s^-1].
+
+Face values of ε and ρ (``face_voidage``): the mean of the two cells, except on fixed
+(inflow, wall) boundary faces, where the voidage is that of the boundary cell: the influx
+cell's 0.4 of Hoomans 1996 §5.2, so that its mass flux is ε_in ρ u_interstitial. Kuipers
+et al. (1992) take donor-cell ερ because their solids voidage is transported with the
+flow; here ε comes from the particles, and face means keep the continuity residual a
+smooth function of the pressure (donor switching made the Newton iteration cycle where
+voidage jumps between cells with almost no flow).
 """
 import numpy as np
 from numba import njit
@@ -138,36 +147,96 @@ def fill_face_ghosts(U, V, flags, nx, ny):
             V[ip, ny + 2 + k] = _normal(ft, V[ip, ny + 2], V[ip, ny + 2 - k], V[ip, 2 + k % ny])
 
 
-# ---------------------------------------------------------------------------- explicit terms
+# ---------------------------------------------------------------------------- stacked work arrays
+# The solver keeps its arrays in a few stacks (fewer kernel arguments compile much faster).
+# C  (5, nx + 2, ny + 2) centre arrays with one ring of boundary cells:
+C_P, C_RHO, C_E, C_PFIX, C_EFIX = 0, 1, 2, 3, 4  # gauge pressure, density, voidage, prescribed p', fixed ε
+# FU (7, nx + 1, ny), FV (7, nx, ny + 1) face arrays without ghosts:
+F_OLD, F_EX, F_BETA, F_RHS, F_FIX, F_WOUT, F_D = 0, 1, 2, 3, 4, 5, 6
+# (velocity at t, explicit terms, β, β u_s + source, fixed value, outflow share, D = ε_f / a)
+# KU (2, nx + 1, ny), KV (2, nx, ny + 1) int8: face kind and inward sign (+1 / -1 on boundary faces, else 0)
+K_KIND, K_SIGN = 0, 1
+# RULES (2, 9): ghost rule per flag for the pressure (row 0) and the voidage (row 1)
+RULE_P, RULE_E = 0, 1
+# VEC (3, nx ny): continuity residual R [kg/s], pressure correction p' [Pa], work
+V_R, V_DP, V_WORK = 0, 1, 2
+# MAT (2, nnz): pressure matrix data (CSC), and the data of the matrix last factorised
+M_DATA, M_FACTORED = 0, 1
+# LUI (4, n + 1): L column pointers, U column pointers, perm_r, perm_c (SuperLU factors)
+L_LP, L_UP, L_PERM_R, L_PERM_C = 0, 1, 2, 3
+# fpar / ipar / out slots
+(F_GX, F_GY, F_DT, F_DX, F_DY, F_AX, F_AY, F_VOL, F_COMP, F_RHOC, F_TOL, F_REUSE, F_SLOW, F_PREF,
+ F_MU) = range(15)
+I_NX, I_NY, I_MAXIT, I_PIN, I_HAVE_LU, I_ITER, I_CHECKED, I_REFACTORED, I_RESUME, I_SCHEME = range(10)
+O_RES, O_QREF, O_IN, O_OUT, O_ACC, O_MASS, O_COURANT, O_REL, O_PREV = range(9)
+# iterate status
+CONVERGED, NEED_FACTORS, MAX_ITERATIONS, NOT_FINITE = 0, 1, 2, 3
+MASS_FLOOR = 1e-4  # share of (gas mass / dt) in the reference flow of the mass residual
+
+
 @njit(cache=True, error_model="numpy")
-def mass_fluxes(U, V, E, RHO, G, H, flags, nx, ny):
-    """G = (ερ)_donor u on x-faces and H = (ερ)_donor v on y-faces [kg m^-2 s^-1]
-    (donor-cell ερ, Kuipers et al. 1992), ghosts filled like velocities."""
-    for i in range(nx + 1):
-        for j in range(ny):
-            w = U[i + 2, j + 2]
-            if w >= 0.0:
-                G[i + 2, j + 2] = E[i, j + 1] * RHO[i, j + 1] * w
+def update_density(C, rho_factor, rho_const, p_ref):
+    """ρ = (p' + p_ref) M/(RT) everywhere (Hoomans 1996 eq. 44; C[C_P] is the pressure relative
+    to p_ref), or the constant density when rho_factor is 0."""
+    P, RHO = C[C_P], C[C_RHO]
+    if rho_factor != 0.0:
+        for i in range(P.shape[0]):
+            for j in range(P.shape[1]):
+                RHO[i, j] = rho_factor * (P[i, j] + p_ref)
+    else:
+        RHO[:, :] = rho_const
+
+
+@njit(cache=True, error_model="numpy")
+def boundary_cells(C, flags, RULES, fpar, ipar):
+    """Boundary cells of voidage and pressure from the flags, then the density everywhere."""
+    nx, ny = ipar[I_NX], ipar[I_NY]
+    fill_centre_ghosts(C[C_E], flags, RULES[RULE_E], C[C_EFIX], nx, ny)
+    fill_centre_ghosts(C[C_P], flags, RULES[RULE_P], C[C_PFIX], nx, ny)
+    update_density(C, fpar[F_COMP], fpar[F_RHOC], fpar[F_PREF])
+
+
+# ---------------------------------------------------------------------------- explicit terms
+@njit(cache=True, error_model="numpy", inline="always")
+def face_voidage(E, la, lb, ra, rb, kind, sign):
+    """ε on the face between padded cells (la, lb) and (ra, rb): the mean, or on a fixed boundary
+    face the boundary cell's (sign > 0: the boundary cell is on the low side)."""
+    if kind == FIXED:
+        return E[la, lb] if sign > 0 else E[ra, rb]
+    return 0.5 * (E[la, lb] + E[ra, rb])
+
+
+@njit(cache=True, error_model="numpy")
+def _mass_flux(W, Q, E, RHO, K, axis, n1, n2):
+    """Q = (ερ)_f w on the faces of one direction [kg m^-2 s^-1]."""
+    kind, sign = K[K_KIND], K[K_SIGN]
+    for i in range(n1):
+        for j in range(n2):
+            if axis == 0:
+                la, lb, ra, rb = i, j + 1, i + 1, j + 1
             else:
-                G[i + 2, j + 2] = E[i + 1, j + 1] * RHO[i + 1, j + 1] * w
-    for i in range(nx):
-        for j in range(ny + 1):
-            w = V[i + 2, j + 2]
-            if w >= 0.0:
-                H[i + 2, j + 2] = E[i + 1, j] * RHO[i + 1, j] * w
-            else:
-                H[i + 2, j + 2] = E[i + 1, j + 1] * RHO[i + 1, j + 1] * w
+                la, lb, ra, rb = i + 1, j, i + 1, j + 1
+            ef = face_voidage(E, la, lb, ra, rb, kind[i, j], sign[i, j])
+            Q[i + 2, j + 2] = ef * 0.5 * (RHO[la, lb] + RHO[ra, rb]) * W[i + 2, j + 2]
+
+
+@njit(cache=True, error_model="numpy")
+def mass_fluxes(U, V, E, RHO, G, H, KU, KV, flags, nx, ny):
+    """G = (ερ)_f u on x-faces and H = (ερ)_f v on y-faces [kg m^-2 s^-1], ghosts filled like velocities."""
+    _mass_flux(U, G, E, RHO, KU, 0, nx + 1, ny)
+    _mass_flux(V, H, E, RHO, KV, 1, nx, ny + 1)
     fill_face_ghosts(G, H, flags, nx, ny)
 
 
 @njit(cache=True, error_model="numpy")
 def explicit_momentum(U, V, G, H, E, mu, dx, dy, scheme, ukind, vkind, exu, exv, nx, ny):
     """Explicit part of the momentum balance (Hoomans 1996 eq. 43) on every solved face [N m^-3]:
-    exu = −[∇·(ερ u u) − u ∇·(ερ u)] − ∇·(ε τ_g), the convection in advective form (donor
-    mass fluxes, face values by ``scheme``) and the viscous stress of eq. 48 (λ_g = 0)."""
+    exu = −[∇·(ερ u u) − u ∇·(ερ u)] − ∇·(ε τ_g), the convection in advective form (the mass
+    fluxes G, H of the continuity equation; face velocities by ``scheme``) and the viscous
+    stress of eq. 48 (λ_g = 0)."""
     for i in range(nx + 1):
         for j in range(ny):
-            if ukind[i, j] != 0:
+            if ukind[i, j] != SOLVED:
                 exu[i, j] = 0.0
                 continue
             I, J = i + 2, j + 2
@@ -188,7 +257,7 @@ def explicit_momentum(U, V, G, H, E, mu, dx, dy, scheme, ukind, vkind, exu, exv,
             exu[i, j] = -adv + (sxx_r - sxx_l) / dx + (tn - ts) / dy
     for i in range(nx):
         for j in range(ny + 1):
-            if vkind[i, j] != 0:
+            if vkind[i, j] != SOLVED:
                 exv[i, j] = 0.0
                 continue
             I, J = i + 2, j + 2
@@ -209,60 +278,145 @@ def explicit_momentum(U, V, G, H, E, mu, dx, dy, scheme, ukind, vkind, exu, exv,
             exv[i, j] = -adv + (syy_n - syy_s) / dy + (te - tw) / dx
 
 
+@njit(cache=True, error_model="numpy")
+def begin_step(U, V, G, H, C, FU, FV, KU, KV, flags, RULES, fpar, ipar):
+    """Ghosts of the old state (pressure, voidage, velocity), its mass fluxes and the
+    explicit momentum terms FU[F_EX], FV[F_EX]."""
+    nx, ny = ipar[I_NX], ipar[I_NY]
+    boundary_cells(C, flags, RULES, fpar, ipar)
+    fill_face_ghosts(U, V, flags, nx, ny)
+    mass_fluxes(U, V, C[C_E], C[C_RHO], G, H, KU, KV, flags, nx, ny)
+    explicit_momentum(U, V, G, H, C[C_E], fpar[F_MU], fpar[F_DX], fpar[F_DY], ipar[I_SCHEME], KU[K_KIND],
+                      KV[K_KIND], FU[F_EX], FV[F_EX], nx, ny)
+
+
 # ---------------------------------------------------------------------------- one iteration
 @njit(cache=True, error_model="numpy")
-def predict_residual(U, V, P, RHO, E, ro_old, u_old, v_old, exu, exv, beta_u, beta_v, rhs_u, rhs_v,
-                     ukind, vkind, ufix, vfix, ubnd, vbnd, wout_u, wout_v, row_of, flags,
-                     gx, gy, dt, dx, dy, area_x, area_y, vol, Du, Dv, R, nx, ny):
+def _predict(W, C, F, K, axis, gravity, dt, h, n1, n2):
+    """Momentum on the faces of one direction (axis 0: x-faces, W = U; axis 1: y-faces, W = V)."""
+    P, RHO, E = C[C_P], C[C_RHO], C[C_E]
+    kind = K[K_KIND]
+    old, ex, beta, rhs, fix, D = F[F_OLD], F[F_EX], F[F_BETA], F[F_RHS], F[F_FIX], F[F_D]
+    for i in range(n1):
+        for j in range(n2):
+            k = kind[i, j]
+            if k == SOLVED:
+                if axis == 0:  # cells (i-1, j) and (i, j)
+                    la, lb, ra, rb = i, j + 1, i + 1, j + 1
+                else:  # cells (i, j-1) and (i, j)
+                    la, lb, ra, rb = i + 1, j, i + 1, j + 1
+                ef = 0.5 * (E[la, lb] + E[ra, rb])
+                m = ef * 0.5 * (RHO[la, lb] + RHO[ra, rb])
+                a = m / dt + beta[i, j]
+                d = ef / a
+                D[i, j] = d
+                W[i + 2, j + 2] = (m * old[i, j] / dt + ex[i, j] + m * gravity + rhs[i, j]) / a \
+                    - d * (P[ra, rb] - P[la, lb]) / h
+            elif k == FIXED:
+                D[i, j] = 0.0
+                W[i + 2, j + 2] = fix[i, j]
+            else:
+                D[i, j] = 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def _fluxes(W, C, K, row_of, R, axis, area, n1, n2):
+    """Add the mass flux A (ερ)_f w of every face of one direction, except outflow faces and
+    periodic duplicates, to the residuals of the cells either side. Returns (inflow, outflow,
+    net inflow, has outflow faces) through the boundary faces of this direction [kg/s]."""
+    RHO, E = C[C_RHO], C[C_E]
+    kind, sign = K[K_KIND], K[K_SIGN]
+    inflow = 0.0
+    outflow = 0.0
+    net_in = 0.0
+    has_outflow = False
+    for i in range(n1):
+        for j in range(n2):
+            k = kind[i, j]
+            if k == COPY:
+                continue
+            if k == OUTFLOW_FACE:
+                has_outflow = True
+                continue
+            if axis == 0:
+                la, lb, ra, rb = i, j + 1, i + 1, j + 1
+            else:
+                la, lb, ra, rb = i + 1, j, i + 1, j + 1
+            w = W[i + 2, j + 2]
+            f = area * face_voidage(E, la, lb, ra, rb, k, sign[i, j]) * 0.5 * (RHO[la, lb] + RHO[ra, rb]) * w
+            rl = row_of[la, lb]
+            rr = row_of[ra, rb]
+            if rl >= 0:
+                R[rl] += f
+            if rr >= 0:
+                R[rr] -= f
+            s = sign[i, j]
+            if s != 0:
+                fin = s * f
+                net_in += fin
+                if fin > 0.0:
+                    inflow += fin
+                else:
+                    outflow -= fin
+    return inflow, outflow, net_in, has_outflow
+
+
+@njit(cache=True, error_model="numpy")
+def _outflow(W, C, F, K, row_of, R, axis, area, need, n1, n2):
+    """Continuous-outflow faces of one direction carry their share F[F_WOUT] of the outflow
+    ``need`` [kg/s]; their velocity follows from the interior cell's ε ρ. Returns (in, out)."""
+    RHO, E = C[C_RHO], C[C_E]
+    kind, sign, share = K[K_KIND], K[K_SIGN], F[F_WOUT]
+    inflow = 0.0
+    outflow = 0.0
+    for i in range(n1):
+        for j in range(n2):
+            if kind[i, j] != OUTFLOW_FACE:
+                continue
+            s = sign[i, j]
+            fout = share[i, j] * need
+            if axis == 0:
+                la, lb, ra, rb = i, j + 1, i + 1, j + 1
+            else:
+                la, lb, ra, rb = i + 1, j, i + 1, j + 1
+            ca, cb = (la, lb) if s < 0 else (ra, rb)  # the interior cell
+            f = -s * fout  # flux along +x (+y)
+            W[i + 2, j + 2] = f / (area * E[ca, cb] * RHO[ca, cb])
+            rl = row_of[la, lb]
+            rr = row_of[ra, rb]
+            if rl >= 0:
+                R[rl] += f
+            if rr >= 0:
+                R[rr] -= f
+            if fout > 0.0:
+                outflow += fout
+            else:
+                inflow -= fout
+    return inflow, outflow
+
+
+@njit(cache=True, error_model="numpy")
+def predict_residual(U, V, C, FU, FV, KU, KV, ro_old, row_of, flags, R, fpar, ipar):
     """Face velocities from the momentum balance at the current pressure, then the cell
     continuity residuals (Hoomans 1996 eqs 42-43).
 
     Momentum on a solved face, implicit in pressure and drag (Kuipers et al. 1992)::
 
-        (ερ)_f (u - u_old)/dt = exu - ε_f ∂p/∂x - β (u - u_s) + (ερ)_f g_x + source
+        (ερ)_f (u - u_old)/dt = ex - ε_f ∂p/∂x - β (u - u_s) + (ερ)_f g_x + source
         u = û - D ∂p/∂x,   D = ε_f / ((ερ)_f/dt + β)
 
-    with ``rhs_u = β u_s + source``. Continuity residual of cell c [kg/s]::
+    with ``F_RHS = β u_s + source``. Continuity residual of cell c [kg/s]::
 
-        R_c = V [(ερ)_c - (ερ)_c,old]/dt + Σ_faces A (ερ)_donor u_out
+        R_c = V [(ερ)_c - (ερ)_c,old]/dt + Σ_faces A (ερ)_f u_out
 
-    Outflow faces carry ``wout`` × the outflow that closes the mass balance. Returns
-    (Σ|R|, reference flow, inflow, outflow, accumulation, mass, courant).
+    Outflow faces carry F_WOUT × the outflow that closes the mass balance. Returns
+    (Σ|R|, reference flow, inflow, outflow, accumulation, mass, Courant number).
     """
-    # momentum on solved faces; fixed faces take their values
-    for i in range(nx + 1):
-        for j in range(ny):
-            k = ukind[i, j]
-            if k == SOLVED:
-                ef = 0.5 * (E[i, j + 1] + E[i + 1, j + 1])
-                m = ef * 0.5 * (RHO[i, j + 1] + RHO[i + 1, j + 1])
-                a = m / dt + beta_u[i, j]
-                uh = (m * u_old[i, j] / dt + exu[i, j] + m * gx + rhs_u[i, j]) / a
-                d = ef / a
-                Du[i, j] = d
-                U[i + 2, j + 2] = uh - d * (P[i + 1, j + 1] - P[i, j + 1]) / dx
-            elif k == FIXED:
-                Du[i, j] = 0.0
-                U[i + 2, j + 2] = ufix[i, j]
-            else:
-                Du[i, j] = 0.0
-    for i in range(nx):
-        for j in range(ny + 1):
-            k = vkind[i, j]
-            if k == SOLVED:
-                ef = 0.5 * (E[i + 1, j] + E[i + 1, j + 1])
-                m = ef * 0.5 * (RHO[i + 1, j] + RHO[i + 1, j + 1])
-                a = m / dt + beta_v[i, j]
-                vh = (m * v_old[i, j] / dt + exv[i, j] + m * gy + rhs_v[i, j]) / a
-                d = ef / a
-                Dv[i, j] = d
-                V[i + 2, j + 2] = vh - d * (P[i + 1, j + 1] - P[i + 1, j]) / dy
-            elif k == FIXED:
-                Dv[i, j] = 0.0
-                V[i + 2, j + 2] = vfix[i, j]
-            else:
-                Dv[i, j] = 0.0
-    # accumulation
+    nx, ny = ipar[I_NX], ipar[I_NY]
+    dt, dx, dy, vol = fpar[F_DT], fpar[F_DX], fpar[F_DY], fpar[F_VOL]
+    _predict(U, C, FU, KU, 0, fpar[F_GX], dt, dx, nx + 1, ny)
+    _predict(V, C, FV, KV, 1, fpar[F_GY], dt, dy, nx, ny + 1)
+    RHO, E = C[C_RHO], C[C_E]
     acc = 0.0
     acc_abs = 0.0
     mass = 0.0
@@ -274,106 +428,16 @@ def predict_residual(U, V, P, RHO, E, ro_old, u_old, v_old, exu, exv, beta_u, be
             acc += a
             acc_abs += abs(a)
             mass += vol * er
-    # fluxes through every face except outflow faces and periodic duplicates
-    inflow = 0.0
-    outflow = 0.0
-    net_in = 0.0
-    has_outflow = False
-    for i in range(nx + 1):
-        for j in range(ny):
-            k = ukind[i, j]
-            if k == COPY:
-                continue
-            if k == OUTFLOW_FACE:
-                has_outflow = True
-                continue
-            w = U[i + 2, j + 2]
-            if w >= 0.0:
-                f = area_x * E[i, j + 1] * RHO[i, j + 1] * w
-            else:
-                f = area_x * E[i + 1, j + 1] * RHO[i + 1, j + 1] * w
-            rl = row_of[i, j + 1]
-            rr = row_of[i + 1, j + 1]
-            if rl >= 0:
-                R[rl] += f
-            if rr >= 0:
-                R[rr] -= f
-            s = ubnd[i, j]
-            if s != 0:
-                fin = s * f
-                net_in += fin
-                if fin > 0.0:
-                    inflow += fin
-                else:
-                    outflow -= fin
-    for i in range(nx):
-        for j in range(ny + 1):
-            k = vkind[i, j]
-            if k == COPY:
-                continue
-            if k == OUTFLOW_FACE:
-                has_outflow = True
-                continue
-            w = V[i + 2, j + 2]
-            if w >= 0.0:
-                f = area_y * E[i + 1, j] * RHO[i + 1, j] * w
-            else:
-                f = area_y * E[i + 1, j + 1] * RHO[i + 1, j + 1] * w
-            rb = row_of[i + 1, j]
-            rt = row_of[i + 1, j + 1]
-            if rb >= 0:
-                R[rb] += f
-            if rt >= 0:
-                R[rt] -= f
-            s = vbnd[i, j]
-            if s != 0:
-                fin = s * f
-                net_in += fin
-                if fin > 0.0:
-                    inflow += fin
-                else:
-                    outflow -= fin
-    # continuous outflow: the faces share the outflow that closes the balance
-    if has_outflow:
-        need = net_in - acc
-        for i in range(nx + 1):
-            for j in range(ny):
-                if ukind[i, j] != OUTFLOW_FACE:
-                    continue
-                s = ubnd[i, j]
-                fout = wout_u[i, j] * need
-                c = i if s < 0 else i + 1  # interior cell (padded column)
-                f = -s * fout  # flux along +x
-                U[i + 2, j + 2] = f / (area_x * E[c, j + 1] * RHO[c, j + 1])
-                rl = row_of[i, j + 1]
-                rr = row_of[i + 1, j + 1]
-                if rl >= 0:
-                    R[rl] += f
-                if rr >= 0:
-                    R[rr] -= f
-                if fout > 0.0:
-                    outflow += fout
-                else:
-                    inflow -= fout
-        for i in range(nx):
-            for j in range(ny + 1):
-                if vkind[i, j] != OUTFLOW_FACE:
-                    continue
-                s = vbnd[i, j]
-                fout = wout_v[i, j] * need
-                c = j if s < 0 else j + 1
-                f = -s * fout
-                V[i + 2, j + 2] = f / (area_y * E[i + 1, c] * RHO[i + 1, c])
-                rb = row_of[i + 1, j]
-                rt = row_of[i + 1, j + 1]
-                if rb >= 0:
-                    R[rb] += f
-                if rt >= 0:
-                    R[rt] -= f
-                if fout > 0.0:
-                    outflow += fout
-                else:
-                    inflow -= fout
+    in_x, out_x, net_x, of_x = _fluxes(U, C, KU, row_of, R, 0, fpar[F_AX], nx + 1, ny)
+    in_y, out_y, net_y, of_y = _fluxes(V, C, KV, row_of, R, 1, fpar[F_AY], nx, ny + 1)
+    inflow = in_x + in_y
+    outflow = out_x + out_y
+    if of_x or of_y:
+        need = net_x + net_y - acc
+        a, b = _outflow(U, C, FU, KU, row_of, R, 0, fpar[F_AX], need, nx + 1, ny)
+        c, d = _outflow(V, C, FV, KV, row_of, R, 1, fpar[F_AY], need, nx, ny + 1)
+        inflow += a + c
+        outflow += b + d
     fill_face_ghosts(U, V, flags, nx, ny)
     res = 0.0
     for k in range(nx * ny):
@@ -386,74 +450,64 @@ def predict_residual(U, V, P, RHO, E, ro_old, u_old, v_old, exu, exv, beta_u, be
     for i in range(nx):
         for j in range(ny + 1):
             vmax = max(vmax, abs(V[i + 2, j + 2]))
-    qref = inflow + outflow + acc_abs + 1e-4 * mass / dt
+    qref = inflow + outflow + acc_abs + MASS_FLOOR * mass / dt
     return res, qref, inflow, outflow, acc, mass, umax * dt / dx + vmax * dt / dy
 
 
 # ---------------------------------------------------------------------------- pressure correction
 @njit(cache=True, error_model="numpy")
-def assemble_pressure(data, diag_pos, upos, vpos, U, V, E, RHO, Du, Dv, ukind, vkind, comp,
-                      dt, dx, dy, area_x, area_y, vol, pin_pos, pin_diag, nx, ny):
+def _assemble_faces(data, pos, W, C, F, K, axis, area, h, comp, n1, n2):
+    """Face terms of the pressure matrix for one direction (see ``assemble_pressure``)."""
+    RHO, E = C[C_RHO], C[C_E]
+    kind, sign, D = K[K_KIND], K[K_SIGN], F[F_D]
+    for i in range(n1):
+        for j in range(n2):
+            k = kind[i, j]
+            if k == COPY or k == OUTFLOW_FACE:
+                continue
+            if axis == 0:
+                la, lb, ra, rb = i, j + 1, i + 1, j + 1
+            else:
+                la, lb, ra, rb = i + 1, j, i + 1, j + 1
+            w = W[i + 2, j + 2]
+            ef = face_voidage(E, la, lb, ra, rb, k, sign[i, j])
+            c = area * ef * 0.5 * (RHO[la, lb] + RHO[ra, rb]) * D[i, j] / h
+            t = 0.5 * area * ef * w * comp  # d(flux)/dp of either cell through ρ_f = (ρ_L + ρ_R)/2
+            # flux out of L: (c + t) p'_L + (t - c) p'_R ; out of R: the negative
+            p_ll, p_lr, p_rl, p_rr = pos[i, j, 0], pos[i, j, 1], pos[i, j, 2], pos[i, j, 3]
+            if p_ll >= 0:
+                data[p_ll] += c + t
+            if p_lr >= 0:
+                data[p_lr] += t - c
+            if p_rl >= 0:
+                data[p_rl] -= c + t
+            if p_rr >= 0:
+                data[p_rr] += c - t
+
+
+@njit(cache=True, error_model="numpy")
+def assemble_pressure(data, diag_pos, upos, vpos, pin_pos, U, V, C, FU, FV, KU, KV, fpar, ipar):
     """Matrix of the pressure correction p' (CSC ``data`` of a fixed pattern): the Newton
     derivative of the continuity residuals R_c with respect to the cell pressures.
 
     Terms: compressibility ε V comp / dt on the diagonal (comp = M/(RT), 0 for constant
-    density; Hoomans 1996 eq. 44), A (ερ)_donor D / h between the two cells of each
-    solved face, and A ε_donor u comp from the donor density of every face with flow.
+    density; Hoomans 1996 eq. 44), A (ερ)_f D / h between the two cells of each solved
+    face, and A ε_f u comp / 2 per cell from the face density (ρ_L + ρ_R)/2 of every face
+    with flow.
     ``upos[i, j]`` holds the positions of (row L, col L), (row L, col R), (row R, col L),
     (row R, col R), −1 where a row or column does not exist. ``pin_pos``: positions of
-    a row replaced by p' = 0 (constant-density gas without a pressure boundary).
+    row 0, replaced by p'_0 = 0 (constant-density gas without a pressure boundary).
     """
+    nx, ny, pin_diag = ipar[I_NX], ipar[I_NY], ipar[I_PIN]
+    comp, dt, vol = fpar[F_COMP], fpar[F_DT], fpar[F_VOL]
+    E = C[C_E]
     data[:] = 0.0
     if comp != 0.0:
         for i in range(nx):
             for j in range(ny):
                 data[diag_pos[i * ny + j]] += comp * E[i + 1, j + 1] * vol / dt
-    for i in range(nx + 1):
-        for j in range(ny):
-            k = ukind[i, j]
-            if k == COPY or k == OUTFLOW_FACE:
-                continue
-            w = U[i + 2, j + 2]
-            if w >= 0.0:
-                er = E[i, j + 1] * RHO[i, j + 1]
-                t = area_x * E[i, j + 1] * w * comp
-            else:
-                er = E[i + 1, j + 1] * RHO[i + 1, j + 1]
-                t = area_x * E[i + 1, j + 1] * w * comp
-            c = area_x * er * Du[i, j] / dx
-            p_ll, p_lr, p_rl, p_rr = upos[i, j, 0], upos[i, j, 1], upos[i, j, 2], upos[i, j, 3]
-            # flux out of L: +c p'_L - c p'_R + t p'_donor ; out of R: the negative
-            if p_ll >= 0:
-                data[p_ll] += c + (t if w >= 0.0 else 0.0)
-            if p_lr >= 0:
-                data[p_lr] += -c + (t if w < 0.0 else 0.0)
-            if p_rl >= 0:
-                data[p_rl] += -c - (t if w >= 0.0 else 0.0)
-            if p_rr >= 0:
-                data[p_rr] += c - (t if w < 0.0 else 0.0)
-    for i in range(nx):
-        for j in range(ny + 1):
-            k = vkind[i, j]
-            if k == COPY or k == OUTFLOW_FACE:
-                continue
-            w = V[i + 2, j + 2]
-            if w >= 0.0:
-                er = E[i + 1, j] * RHO[i + 1, j]
-                t = area_y * E[i + 1, j] * w * comp
-            else:
-                er = E[i + 1, j + 1] * RHO[i + 1, j + 1]
-                t = area_y * E[i + 1, j + 1] * w * comp
-            c = area_y * er * Dv[i, j] / dy
-            p_bb, p_bt, p_tb, p_tt = vpos[i, j, 0], vpos[i, j, 1], vpos[i, j, 2], vpos[i, j, 3]
-            if p_bb >= 0:
-                data[p_bb] += c + (t if w >= 0.0 else 0.0)
-            if p_bt >= 0:
-                data[p_bt] += -c + (t if w < 0.0 else 0.0)
-            if p_tb >= 0:
-                data[p_tb] += -c - (t if w >= 0.0 else 0.0)
-            if p_tt >= 0:
-                data[p_tt] += c - (t if w < 0.0 else 0.0)
+    _assemble_faces(data, upos, U, C, FU, KU, 0, fpar[F_AX], fpar[F_DX], comp, nx + 1, ny)
+    _assemble_faces(data, vpos, V, C, FV, KV, 1, fpar[F_AY], fpar[F_DY], comp, nx, ny + 1)
     if pin_diag >= 0:
         for p in pin_pos:
             data[p] = 0.0
@@ -461,32 +515,11 @@ def assemble_pressure(data, diag_pos, upos, vpos, U, V, E, RHO, Du, Dv, ukind, v
 
 
 @njit(cache=True, error_model="numpy")
-def apply_correction(P, RHO, dp, flags, prule, pfix, rho_factor, rho_const, nx, ny):
-    """p += p' in the interior, boundary-cell pressures from the flags, and the density:
-    ρ = p M/(RT) (Hoomans 1996 eq. 44; ``rho_factor`` = M/(RT)) or the constant ``rho_const``."""
-    for i in range(nx):
-        for j in range(ny):
-            P[i + 1, j + 1] += dp[i * ny + j]
-    fill_centre_ghosts(P, flags, prule, pfix, nx, ny)
-    update_density(P, RHO, rho_factor, rho_const)
-
-
-@njit(cache=True, error_model="numpy")
-def update_density(P, RHO, rho_factor, rho_const):
-    """ρ = p M/(RT) everywhere (Hoomans 1996 eq. 44), or the constant density when rho_factor is 0."""
-    if rho_factor != 0.0:
-        for i in range(P.shape[0]):
-            for j in range(P.shape[1]):
-                RHO[i, j] = rho_factor * P[i, j]
-    else:
-        RHO[:, :] = rho_const
-
-
-@njit(cache=True, error_model="numpy")
-def lu_solve(Lp, Li, Lx, Up, Ui, Ux, Ud, perm_r, perm_c, b, x, w):
+def lu_solve(LUI, Li, Lx, Ui, Ux, Ud, b, x, w):
     """x = A^-1 b from SuperLU factors Pr A Pc = L U: L strictly lower (unit diagonal), U strictly
     upper plus its diagonal Ud, both CSC; w[perm_r] = b, then x = (U^-1 L^-1 w)[perm_c]."""
     n = b.size
+    Lp, Up, perm_r, perm_c = LUI[L_LP], LUI[L_UP], LUI[L_PERM_R], LUI[L_PERM_C]
     for i in range(n):
         w[perm_r[i]] = b[i]
     for j in range(n):
@@ -504,20 +537,9 @@ def lu_solve(Lp, Li, Lx, Up, Ui, Ux, Ud, perm_r, perm_c, b, x, w):
         x[i] = w[perm_c[i]]
 
 
-# fpar / ipar slots of ``iterate``
-F_GX, F_GY, F_DT, F_DX, F_DY, F_AX, F_AY, F_VOL, F_COMP, F_RHOC, F_TOL, F_REUSE, F_SLOW = range(13)
-I_NX, I_NY, I_MAXIT, I_PIN, I_HAVE_LU, I_ITER, I_CHECKED, I_REFACTORED, I_RESUME = range(9)
-# out slots
-O_RES, O_QREF, O_IN, O_OUT, O_ACC, O_MASS, O_COURANT, O_REL, O_PREV = range(9)
-# iterate status
-CONVERGED, NEED_FACTORS, MAX_ITERATIONS, NOT_FINITE = 0, 1, 2, 3
-
-
 @njit(cache=True, error_model="numpy")
-def iterate(U, V, P, RHO, E, ro_old, u_old, v_old, exu, exv, beta_u, beta_v, rhs_u, rhs_v,
-            ukind, vkind, ufix, vfix, ubnd, vbnd, wout_u, wout_v, row_of, flags, prule, pfix,
-            Du, Dv, R, dp, data, lu_data, diag_pos, upos, vpos, pin_pos,
-            Lp, Li, Lx, Up, Ui, Ux, Ud, perm_r, perm_c, work, fpar, ipar, out):
+def iterate(U, V, C, FU, FV, KU, KV, ro_old, row_of, flags, RULES, VEC, MAT, diag_pos, upos, vpos, pin_pos,
+            LUI, Li, Lx, Ui, Ux, Ud, fpar, ipar, out):
     """Pressure-correction (Newton) iterations of one time step until the mass residual is below
     ``fpar[F_TOL]``.
 
@@ -525,22 +547,19 @@ def iterate(U, V, P, RHO, E, ro_old, u_old, v_old, exu, exv, beta_u, beta_v, rhs
     p' from the factorised pressure matrix and p += p'. The factors are those of an earlier
     matrix while it stays within ``F_REUSE`` (max norm) of the current one; when it does not,
     or an iteration reduces the residual by less than ``F_SLOW``, the kernel returns
-    NEED_FACTORS with the current matrix in ``data``; the caller factorises it and calls again
-    (``I_RESUME`` then skips straight to the solve). Returns CONVERGED, MAX_ITERATIONS or
-    NOT_FINITE otherwise; the step's diagnostics are in ``out``.
+    NEED_FACTORS with the current matrix in ``MAT[M_DATA]``; the caller factorises it and calls
+    again (``I_RESUME`` then skips straight to the solve). Otherwise it returns CONVERGED,
+    MAX_ITERATIONS or NOT_FINITE; the step's diagnostics are in ``out``.
     """
-    gx, gy, dt, dx, dy = fpar[F_GX], fpar[F_GY], fpar[F_DT], fpar[F_DX], fpar[F_DY]
-    area_x, area_y, vol, comp, rho_c = fpar[F_AX], fpar[F_AY], fpar[F_VOL], fpar[F_COMP], fpar[F_RHOC]
     nx, ny, max_it, pin_diag = ipar[I_NX], ipar[I_NY], ipar[I_MAXIT], ipar[I_PIN]
+    R, dp, work = VEC[V_R], VEC[V_DP], VEC[V_WORK]
+    data, factored = MAT[M_DATA], MAT[M_FACTORED]
     n = nx * ny
     it = ipar[I_ITER]
-    prev = out[O_PREV]
     while True:
         if ipar[I_RESUME] == 0:
-            res, qref, fin, fout, acc, mass, courant = predict_residual(
-                U, V, P, RHO, E, ro_old, u_old, v_old, exu, exv, beta_u, beta_v, rhs_u, rhs_v, ukind, vkind,
-                ufix, vfix, ubnd, vbnd, wout_u, wout_v, row_of, flags, gx, gy, dt, dx, dy, area_x, area_y, vol,
-                Du, Dv, R, nx, ny)
+            res, qref, fin, fout, acc, mass, courant = predict_residual(U, V, C, FU, FV, KU, KV, ro_old, row_of,
+                                                                        flags, R, fpar, ipar)
             rel = res / qref if qref > 0.0 else 0.0
             out[O_RES], out[O_QREF], out[O_IN], out[O_OUT] = res, qref, fin, fout
             out[O_ACC], out[O_MASS], out[O_COURANT], out[O_REL] = acc, mass, courant, rel
@@ -554,54 +573,35 @@ def iterate(U, V, P, RHO, E, ro_old, u_old, v_old, exu, exv, beta_u, beta_v, rhs
             need = False
             if ipar[I_CHECKED] == 0:
                 ipar[I_CHECKED] = 1
-                assemble_pressure(data, diag_pos, upos, vpos, U, V, E, RHO, Du, Dv, ukind, vkind, comp, dt, dx, dy,
-                                  area_x, area_y, vol, pin_pos, pin_diag, nx, ny)
+                assemble_pressure(data, diag_pos, upos, vpos, pin_pos, U, V, C, FU, FV, KU, KV, fpar, ipar)
                 if ipar[I_HAVE_LU] == 0:
                     need = True
                 else:
                     dmax = 0.0
                     amax = 0.0
                     for k in range(data.size):
-                        dmax = max(dmax, abs(data[k] - lu_data[k]))
-                        amax = max(amax, abs(lu_data[k]))
+                        dmax = max(dmax, abs(data[k] - factored[k]))
+                        amax = max(amax, abs(factored[k]))
                     need = dmax > fpar[F_REUSE] * amax
-            elif rel > fpar[F_SLOW] * prev and ipar[I_REFACTORED] == 0:
-                assemble_pressure(data, diag_pos, upos, vpos, U, V, E, RHO, Du, Dv, ukind, vkind, comp, dt, dx, dy,
-                                  area_x, area_y, vol, pin_pos, pin_diag, nx, ny)
+            elif rel > fpar[F_SLOW] * out[O_PREV] and ipar[I_REFACTORED] == 0:
+                assemble_pressure(data, diag_pos, upos, vpos, pin_pos, U, V, C, FU, FV, KU, KV, fpar, ipar)
                 need = True
             if need:
                 ipar[I_REFACTORED] = 1
                 ipar[I_RESUME] = 1
-                out[O_PREV] = rel
                 return NEED_FACTORS
         ipar[I_RESUME] = 0
-        prev = out[O_REL]
-        out[O_PREV] = prev
+        out[O_PREV] = out[O_REL]
         for k in range(n):
             R[k] = -R[k]
         if pin_diag >= 0:
             R[0] = 0.0
-        lu_solve(Lp, Li, Lx, Up, Ui, Ux, Ud, perm_r, perm_c, R, dp, work)
-        apply_correction(P, RHO, dp, flags, prule, pfix, comp, rho_c, nx, ny)
+        lu_solve(LUI, Li, Lx, Ui, Ux, Ud, R, dp, work)
+        P = C[C_P]
+        for i in range(nx):
+            for j in range(ny):
+                P[i + 1, j + 1] += dp[i * ny + j]
+        fill_centre_ghosts(P, flags, RULES[RULE_P], C[C_PFIX], nx, ny)
+        update_density(C, fpar[F_COMP], fpar[F_RHOC], fpar[F_PREF])
         it += 1
         ipar[I_ITER] = it
-
-
-@njit(cache=True, error_model="numpy")
-def begin_step(U, V, P, RHO, E, G, H, flags, prule, pfix_old, erule, efix, rho_factor, rho_const, mu, dx, dy,
-               scheme, ukind, vkind, exu, exv, nx, ny):
-    """Ghosts of the old state, its donor mass fluxes and the explicit momentum terms."""
-    fill_centre_ghosts(P, flags, prule, pfix_old, nx, ny)
-    fill_centre_ghosts(E, flags, erule, efix, nx, ny)
-    update_density(P, RHO, rho_factor, rho_const)
-    fill_face_ghosts(U, V, flags, nx, ny)
-    mass_fluxes(U, V, E, RHO, G, H, flags, nx, ny)
-    explicit_momentum(U, V, G, H, E, mu, dx, dy, scheme, ukind, vkind, exu, exv, nx, ny)
-
-
-@njit(cache=True, error_model="numpy")
-def end_of_step_ghosts(P, RHO, E, flags, prule, pfix, erule, efix, rho_factor, rho_const, nx, ny):
-    """Boundary cells of the new voidage and of the pressure at t + dt, and the density."""
-    fill_centre_ghosts(E, flags, erule, efix, nx, ny)
-    fill_centre_ghosts(P, flags, prule, pfix, nx, ny)
-    update_density(P, RHO, rho_factor, rho_const)

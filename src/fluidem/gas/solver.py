@@ -12,8 +12,8 @@ Equations (ε voidage, ρ gas density, u gas velocity (interstitial), v solids v
     ρ = p M/(RT)  (or a constant)                                       eq. 44
     τ_g = −[(λ_g − 2/3 μ_g)(∇·u) I + μ_g (∇u + ∇uᵀ)],  λ_g = 0          eq. 48
 
-Time step (semi-implicit, as Kuipers et al. 1992): convection (donor-cell mass fluxes,
-upwind or TVD face values) and viscous stress are explicit; pressure, interphase drag
+Time step (semi-implicit, as Kuipers et al. 1992): convection (mass fluxes with face
+means of ε and ρ, upwind or TVD face velocities) and viscous stress are explicit; pressure, interphase drag
 and the inertia/gravity density are implicit. Each face velocity is then
 u = û − D ∂p/∂x with a scalar D, so the pressure correction of the SIMPLE family is
 exact here: the outer iterations are Newton iterations of the continuity equation for
@@ -251,9 +251,12 @@ class GasSolver:
             sign[-1] = np.where(ghost_hi == PERIODIC, 0, -1)
             return kind, sign
 
-        self.ukind, self.ubnd = kinds(nx + 1, ny, fl[0, 1:-1], fl[-1, 1:-1])
+        uk, us = kinds(nx + 1, ny, fl[0, 1:-1], fl[-1, 1:-1])
         vk, vs = kinds(ny + 1, nx, fl[1:-1, 0], fl[1:-1, -1])
-        self.vkind, self.vbnd = np.ascontiguousarray(vk.T), np.ascontiguousarray(vs.T)
+        self.KU = np.stack([uk, us])  # K_KIND, K_SIGN
+        self.KV = np.stack([vk.T, vs.T])
+        self.ukind, self.ubnd = self.KU[K.K_KIND], self.KU[K.K_SIGN]
+        self.vkind, self.vbnd = self.KV[K.K_KIND], self.KV[K.K_SIGN]
         # inflow: per side the segment weights of its faces
         self._inflows = []
         for side in SIDES:
@@ -279,8 +282,8 @@ class GasSolver:
             col[ghost] = np.where(f == PERIODIC, opposite, np.where(np.isin(f, zero_gradient), adjacent, -1))
         self.row_of, self.col_of = row, col
         # ghost rules of centre scalars, indexed by flag
-        self.prule = np.zeros(9, np.int64)
-        self.erule = np.zeros(9, np.int64)
+        self.RULES = np.zeros((2, 9), np.int64)
+        self.prule, self.erule = self.RULES[K.RULE_P], self.RULES[K.RULE_E]
         for f in (FREE_SLIP, NO_SLIP, INFLOW, OUTFLOW):
             self.prule[f] = K.R_COPY
         self.prule[PRESSURE] = K.R_FIXED
@@ -289,10 +292,12 @@ class GasSolver:
             self.erule[f] = K.R_COPY  # Hoomans 1996 §3.5: wall cells copy the adjacent voidage
         self.erule[INFLOW] = K.R_FIXED  # Hoomans 1996 §3.5: fixed voidage in influx cells
         self.erule[PERIODIC] = K.R_WRAP
-        self.efix = np.ones((nx + 2, ny + 2))
+        self.C = np.zeros((5, nx + 2, ny + 2))  # stacked centre arrays, slots K.C_*
+        self.P, self.RHO, self.E = self.C[K.C_P], self.C[K.C_RHO], self.C[K.C_E]
+        self.pfix, self.efix = self.C[K.C_PFIX], self.C[K.C_EFIX]
+        self.efix[:] = 1.0
         for side, bc, _ in self._inflows:
             self.efix[self._ghost_index(side)] = bc.voidage
-        self.pfix = np.zeros((nx + 2, ny + 2))
 
     @staticmethod
     def _ghost_index(side):
@@ -322,7 +327,8 @@ class GasSolver:
         keys = np.unique(cols * n + rows)  # CSC order: by column, then row
         self._indices = (keys % n).astype(np.int32)
         self._indptr = np.searchsorted(keys, np.arange(n + 1) * n).astype(np.int32)
-        self._data = np.zeros(keys.size)
+        self.MAT = np.zeros((2, keys.size))  # M_DATA, M_FACTORED
+        self._data, self._lu_data = self.MAT[K.M_DATA], self.MAT[K.M_FACTORED]
 
         def pos(r, c, valid):
             p = np.searchsorted(keys, c * n + r)
@@ -342,23 +348,24 @@ class GasSolver:
 
     def _setup_work(self):
         nx, ny = self.grid.nx, self.grid.ny
-        c = (nx + 2, ny + 2)
-        self.P, self.RHO, self.E = np.zeros(c), np.zeros(c), np.zeros(c)
         self.U, self.G = np.zeros((nx + 5, ny + 4)), np.zeros((nx + 5, ny + 4))
         self.V, self.H = np.zeros((nx + 4, ny + 5)), np.zeros((nx + 4, ny + 5))
-        self.exu, self.exv = np.zeros(self.grid.u_shape), np.zeros(self.grid.v_shape)
-        self._rhs_u, self._rhs_v = np.zeros(self.grid.u_shape), np.zeros(self.grid.v_shape)
-        self.Du, self.Dv = np.zeros(self.grid.u_shape), np.zeros(self.grid.v_shape)
-        self.ufix, self.vfix = np.zeros(self.grid.u_shape), np.zeros(self.grid.v_shape)
-        self.wout_u, self.wout_v = np.zeros(self.grid.u_shape), np.zeros(self.grid.v_shape)
+        self.FU = np.zeros((7,) + self.grid.u_shape)  # stacked x-face arrays, slots K.F_*
+        self.FV = np.zeros((7,) + self.grid.v_shape)
+        self.exu, self.exv = self.FU[K.F_EX], self.FV[K.F_EX]
+        self.Du, self.Dv = self.FU[K.F_D], self.FV[K.F_D]
+        self.ufix, self.vfix = self.FU[K.F_FIX], self.FV[K.F_FIX]
+        self.wout_u, self.wout_v = self.FU[K.F_WOUT], self.FV[K.F_WOUT]
+        self._tmp_u, self._tmp_v = np.zeros(self.grid.u_shape), np.zeros(self.grid.v_shape)
         n = nx * ny
-        self.R, self._dp, self._work_n = np.zeros(n), np.zeros(n), np.zeros(n)
-        self._zero_u, self._zero_v = np.zeros(self.grid.u_shape), np.zeros(self.grid.v_shape)
-        self._lu_data = np.zeros_like(self._data)
-        i0, f0 = np.zeros(1, np.int64), np.zeros(1)
-        self._factors = (i0, i0, f0, i0, i0, f0, f0, i0, i0)  # none yet
+        self.VEC = np.zeros((3, n))  # V_R, V_DP, V_WORK
+        self.R = self.VEC[K.V_R]
+        self._factors = (np.zeros((4, n + 1), np.int64), np.zeros(1, np.int64), np.zeros(1), np.zeros(1, np.int64),
+                         np.zeros(1), np.ones(n))  # LUI, Li, Lx, Ui, Ux, Ud: none yet
         gd = self.grid
-        self._fpar = np.zeros(13)
+        self._fpar = np.zeros(15)
+        self._fpar[K.F_MU] = self.props.viscosity
+        self._fpar[K.F_PREF] = self.props.reference_pressure
         self._fpar[[K.F_GX, K.F_GY, K.F_DX, K.F_DY, K.F_AX, K.F_AY, K.F_VOL]] = (
             self.gravity[0], self.gravity[1], gd.dx, gd.dy, gd.area_x, gd.area_y, gd.cell_volume)
         self._fpar[K.F_COMP] = self.props.compressibility
@@ -366,11 +373,10 @@ class GasSolver:
         self._fpar[K.F_TOL] = self.tolerance
         self._fpar[K.F_REUSE] = self.jacobian_reuse
         self._fpar[K.F_SLOW] = SLOW_CONVERGENCE
-        self._ipar = np.zeros(9, np.int64)
-        self._ipar[[K.I_NX, K.I_NY, K.I_MAXIT, K.I_PIN]] = nx, ny, self.max_iterations, self.pin_diag
+        self._ipar = np.zeros(10, np.int64)
+        self._ipar[[K.I_NX, K.I_NY, K.I_MAXIT, K.I_PIN, K.I_SCHEME]] = (nx, ny, self.max_iterations, self.pin_diag,
+                                                                      SCHEMES[self.convection])
         self._out = np.zeros(9)
-        self._scheme = SCHEMES[self.convection]
-        self._dxdy = (gd.dx, gd.dy)
 
     # ------------------------------------------------------------ boundary values
     def _set_boundary_values(self, t: float) -> None:
@@ -388,7 +394,7 @@ class GasSolver:
                 self.vfix[:, -1] = -vel
         for side, bc in self._pressure_sides:
             p = self.props.reference_pressure if bc.pressure is None else evaluate(bc.pressure, t)
-            self.pfix[self._ghost_index(side)] = p
+            self.pfix[self._ghost_index(side)] = p - self.props.reference_pressure  # gauge
 
     def _outflow_weights(self, u: np.ndarray, v: np.ndarray) -> None:
         """Shares of the total outflow per continuous-outflow face: the outward mass flux through the
@@ -495,15 +501,22 @@ class GasSolver:
                             "(nx, ny)")
         return a
 
-    def _face_array(self, name, value, shape, centre_ok=True, periodic=False, axis=0):
-        """A face array from a scalar, a face array of ``shape``, or (centre_ok) a centre array."""
+    def _face_array(self, name, value, shape, centre_ok=True, periodic=False, axis=0, out=None):
+        """A face array from a scalar, a face array of ``shape``, or (centre_ok) a centre array
+        averaged onto the faces; written into ``out`` when given."""
         a = np.asarray(value, float)
         if a.ndim == 0:
-            return np.full(shape, float(a))
+            if out is None:
+                return np.full(shape, float(a))
+            out.fill(float(a))
+            return out
         if a.shape == shape:
-            return a
+            if out is None:
+                return a
+            out[...] = a
+            return out
         if centre_ok and a.shape == self.grid.shape:
-            out = np.empty(shape)
+            out = np.empty(shape) if out is None else out
             (centre_to_x_faces if axis == 0 else centre_to_y_faces)(np.ascontiguousarray(a), periodic, out)
             return out
         allowed = f"{shape} (faces)" + (f" or {self.grid.shape} (cell centres)" if centre_ok else "")
@@ -514,16 +527,16 @@ class GasSolver:
             bad = eps[~((eps > 0.0) & (eps <= 1.0))].ravel()[0]
             raise CaseError(f"gas voidage: value {bad!r} outside (0, 1]")
 
-    def _faces_pair(self, name, value, centre_ok=True):
-        """(x-face array, y-face array) from None, a scalar, a centre array, or a pair of face arrays."""
+    def _faces_pair(self, name, value, out_u, out_v):
+        """Write x-face and y-face values of ``value`` (a scalar, a centre array, or a pair of face
+        arrays) into ``out_u``, ``out_v``."""
         gd = self.grid
-        if value is None:
-            return self._zero_u, self._zero_v
         if isinstance(value, (tuple, list)) and len(value) == 2:
-            return (self._face_array(f"{name}[0]", value[0], gd.u_shape, centre_ok=False),
-                    self._face_array(f"{name}[1]", value[1], gd.v_shape, centre_ok=False))
-        return (self._face_array(name, value, gd.u_shape, centre_ok, self.periodic_x, 0),
-                self._face_array(name, value, gd.v_shape, centre_ok, self.periodic_y, 1))
+            self._face_array(f"{name}[0]", value[0], gd.u_shape, centre_ok=False, out=out_u)
+            self._face_array(f"{name}[1]", value[1], gd.v_shape, centre_ok=False, out=out_v)
+        else:
+            self._face_array(name, value, gd.u_shape, True, self.periodic_x, 0, out=out_u)
+            self._face_array(name, value, gd.v_shape, True, self.periodic_y, 1, out=out_v)
 
     def _check_state(self, state: GasState) -> None:
         gd = self.grid
@@ -570,57 +583,61 @@ class GasSolver:
         eps_new = state.voidage if voidage is None else self._centre_array("voidage", voidage)
         if voidage is not None:
             self._check_voidage(eps_new)
-        beta_u, beta_v = self._faces_pair("beta", beta)
-        if beta is not None and not (beta_u.min() >= 0.0 and beta_v.min() >= 0.0 and np.isfinite(beta_u.max())
-                                     and np.isfinite(beta_v.max())):
-            raise CaseError("gas beta: must be finite and >= 0 [kg m^-3 s^-1]")
+        FU, FV = self.FU, self.FV
+        if beta is None:
+            FU[K.F_BETA].fill(0.0)
+            FV[K.F_BETA].fill(0.0)
+        else:
+            self._faces_pair("beta", beta, FU[K.F_BETA], FV[K.F_BETA])
+            if not (FU[K.F_BETA].min() >= 0.0 and FV[K.F_BETA].min() >= 0.0 and np.isfinite(FU[K.F_BETA].max())
+                    and np.isfinite(FV[K.F_BETA].max())):
+                raise CaseError("gas beta: must be finite and >= 0 [kg m^-3 s^-1] on every face")
         if isinstance(solids_u, (tuple, list)) or isinstance(solids_v, (tuple, list)):
             raise CaseError("gas solids_u / solids_v: give one array each (faces or centres), not a pair")
-        rhs_u, rhs_v = self._rhs_u, self._rhs_v
-        rhs_u[:] = 0.0
-        rhs_v[:] = 0.0
+        rhs_u, rhs_v = FU[K.F_RHS], FV[K.F_RHS]
+        rhs_u.fill(0.0)
+        rhs_v.fill(0.0)
         if beta is not None:
             if solids_u is not None:
-                rhs_u += beta_u * self._face_array("solids_u", solids_u, gd.u_shape, True, self.periodic_x, 0)
+                rhs_u += FU[K.F_BETA] * self._face_array("solids_u", solids_u, gd.u_shape, True, self.periodic_x, 0,
+                                                         out=self._tmp_u)
             if solids_v is not None:
-                rhs_v += beta_v * self._face_array("solids_v", solids_v, gd.v_shape, True, self.periodic_y, 1)
+                rhs_v += FV[K.F_BETA] * self._face_array("solids_v", solids_v, gd.v_shape, True, self.periodic_y, 1,
+                                                         out=self._tmp_v)
         if source_u is not None:
-            rhs_u += self._face_array("source_u", source_u, gd.u_shape, True, self.periodic_x, 0)
+            rhs_u += self._face_array("source_u", source_u, gd.u_shape, True, self.periodic_x, 0, out=self._tmp_u)
         if source_v is not None:
-            rhs_v += self._face_array("source_v", source_v, gd.v_shape, True, self.periodic_y, 1)
-        beta_u, beta_v = np.ascontiguousarray(beta_u), np.ascontiguousarray(beta_v)
+            rhs_v += self._face_array("source_v", source_v, gd.v_shape, True, self.periodic_y, 1, out=self._tmp_v)
+        FU[K.F_OLD] = state.u
+        FV[K.F_OLD] = state.v
 
-        P, RHO, E, U, V = self.P, self.RHO, self.E, self.U, self.V
-        rf, rc = self._fpar[K.F_COMP], self._fpar[K.F_RHOC]
-        # old state: ghosts, donor mass fluxes, explicit convection and viscous terms
+        P, U, V = self.P, self.U, self.V
+        fpar, ipar, out = self._fpar, self._ipar, self._out
+        fpar[K.F_DT] = dt
+        # old state: ghosts, mass fluxes, explicit convection and viscous terms
         if t != self._bc_time:
             self._set_boundary_values(t)
-        P[1:-1, 1:-1] = state.p
-        E[1:-1, 1:-1] = state.voidage
+        p_ref = self.props.reference_pressure
+        np.subtract(state.p, p_ref, out=P[1:-1, 1:-1])  # gauge pressure inside the solver
+        self.E[1:-1, 1:-1] = state.voidage
         U[2:nx + 3, 2:ny + 2] = state.u
         V[2:nx + 2, 2:ny + 3] = state.v
-        K.begin_step(U, V, P, RHO, E, self.G, self.H, self.flags, self.prule, self.pfix, self.erule, self.efix,
-                     rf, rc, self.props.viscosity, self._dxdy[0], self._dxdy[1], self._scheme, self.ukind, self.vkind,
-                     self.exu, self.exv, nx, ny)
+        K.begin_step(U, V, self.G, self.H, self.C, FU, FV, self.KU, self.KV, self.flags, self.RULES, fpar, ipar)
         ro_old = state.voidage * state.rho
         if self.has_outflow:
             self._outflow_weights(state.u, state.v)
         # new voidage and boundary values at t + dt
-        E[1:-1, 1:-1] = eps_new
+        self.E[1:-1, 1:-1] = eps_new
         self._set_boundary_values(t + dt)
-        K.end_of_step_ghosts(P, RHO, E, self.flags, self.prule, self.pfix, self.erule, self.efix, rf, rc, nx, ny)
+        K.boundary_cells(self.C, self.flags, self.RULES, fpar, ipar)
 
-        fpar, ipar, out = self._fpar, self._ipar, self._out
-        fpar[K.F_DT] = dt
         ipar[K.I_ITER] = ipar[K.I_CHECKED] = ipar[K.I_REFACTORED] = ipar[K.I_RESUME] = 0
         out[K.O_PREV] = math.inf
         while True:
             f = self._factors
-            status = K.iterate(U, V, P, RHO, E, ro_old, state.u, state.v, self.exu, self.exv, beta_u, beta_v, rhs_u,
-                               rhs_v, self.ukind, self.vkind, self.ufix, self.vfix, self.ubnd, self.vbnd, self.wout_u,
-                               self.wout_v, self.row_of, self.flags, self.prule, self.pfix, self.Du, self.Dv, self.R,
-                               self._dp, self._data, self._lu_data, self.diag_pos, self.upos, self.vpos, self.pin_pos,
-                               f[0], f[1], f[2], f[3], f[4], f[5], f[6], f[7], f[8], self._work_n, fpar, ipar, out)
+            status = K.iterate(U, V, self.C, FU, FV, self.KU, self.KV, ro_old, self.row_of, self.flags, self.RULES,
+                               self.VEC, self.MAT, self.diag_pos, self.upos, self.vpos, self.pin_pos,
+                               f[0], f[1], f[2], f[3], f[4], f[5], fpar, ipar, out)
             if status == K.NEED_FACTORS:
                 self._factorise()
                 continue
@@ -630,8 +647,8 @@ class GasSolver:
                                       "reduce the time step (Courant number below 1)")
         rel = float(out[K.O_REL])
         mass = float(out[K.O_MASS])
-        state.p[...] = P[1:-1, 1:-1]
-        state.rho[...] = RHO[1:-1, 1:-1]
+        np.add(P[1:-1, 1:-1], p_ref, out=state.p)
+        state.rho[...] = self.RHO[1:-1, 1:-1]
         state.u[...] = U[2:nx + 3, 2:ny + 2]
         state.v[...] = V[2:nx + 2, 2:ny + 3]
         if voidage is not None:
@@ -648,11 +665,14 @@ class GasSolver:
         lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A")
         L = sp.tril(lu.L, k=-1, format="csc")
         Uu = lu.U.tocsc()
-        Ud = Uu.diagonal().copy()
         Us = sp.triu(Uu, k=1, format="csc")
-        self._factors = (L.indptr.astype(np.int64), L.indices.astype(np.int64), L.data.copy(),
-                         Us.indptr.astype(np.int64), Us.indices.astype(np.int64), Us.data.copy(), Ud,
-                         lu.perm_r.astype(np.int64), lu.perm_c.astype(np.int64))
+        lui = np.zeros((4, n + 1), np.int64)
+        lui[K.L_LP] = L.indptr
+        lui[K.L_UP] = Us.indptr
+        lui[K.L_PERM_R, :n] = lu.perm_r
+        lui[K.L_PERM_C, :n] = lu.perm_c
+        self._factors = (lui, L.indices.astype(np.int64), L.data.copy(), Us.indices.astype(np.int64), Us.data.copy(),
+                         Uu.diagonal().copy())
         self._lu_data[:] = self._data
         self._ipar[K.I_HAVE_LU] = 1
         self.factorisations += 1

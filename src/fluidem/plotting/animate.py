@@ -77,47 +77,54 @@ def animate_run(run: RunData, out_file: str | Path, color: str = "height", fps: 
     except OSError as err:
         raise CaseError(f"--out {str(out_file)!r}: cannot create its folder: {err.strerror or err}") from None
 
+    tmp = out_file.with_name(f".{out_file.stem}.partial.mp4")  # ffmpeg picks the container by suffix
     try:
-        first = run.snapshot(0)
-        view = view_of(run, first)
-        vmax = speed_max(run) if color == "speed" else None
-        colourer = Colourer(color, run, view, first, bands, vmax)
-        width, height = frame_size(view.aspect, height_px, color)
-        tmp = out_file.with_name(f".{out_file.stem}.partial.mp4")
-        frames = 0
-        with style.context():
-            fig = style.new_figure(width / DPI, height / DPI, dpi=DPI)
-            ax = fig.subplots()
-            setup_particle_axes(ax, view)
-            if color == "speed":
-                colourer.decorate(fig, [ax], [first])
-            elif color == "species":
-                colourer.decorate(fig, [ax], [run.snapshot(k) for k in (0, -1)])
-            writer = iio.get_writer(tmp, format="FFMPEG", mode="I", fps=fps, codec="libx264",
-                                    pixelformat="yuv420p", macro_block_size=BLOCK, quality=8,
-                                    ffmpeg_log_level="error")
-            try:
-                coll = None
-                for k in range(len(run.snapshot_times)):
-                    snap = first if k == 0 else run.snapshot(k)
-                    if coll is not None:
-                        coll.remove()
-                    coll = draw_particles(ax, view, snap, colourer.colours(snap))
-                    ax.set_title(_time_title(snap["time"]))
-                    fig.canvas.draw()
-                    if k == 0:
-                        fig.set_layout_engine("none")  # freeze the layout: every frame the same
-                    writer.append_data(_frame(fig, width, height))
-                    frames += 1
-            finally:
-                writer.close()
+        frames, width, height = _write_frames(iio, run, tmp, color, fps, height_px, bands)
         os.replace(tmp, out_file)
     except Unavailable as err:
         raise CaseError(f"{run.path}: {err}") from None
     finally:
-        if "tmp" in locals() and Path(tmp).exists():
-            Path(tmp).unlink()
+        if tmp.exists():
+            tmp.unlink()
     return AnimationResult(out_file, frames, width, height, float(fps))
+
+
+def _write_frames(iio, run: RunData, path: Path, color: str, fps: float, height_px: int,
+                  bands: int) -> tuple[int, int, int]:
+    """Draw and encode every snapshot into ``path``: (frames, width, height)."""
+    first = run.snapshot(0)
+    view = view_of(run, first)
+    vmax = speed_max(run) if color == "speed" else None
+    colourer = Colourer(color, run, view, first, bands, vmax)
+    width, height = frame_size(view.aspect, height_px, color)
+    frames = 0
+    with style.context():
+        fig = style.new_figure(width / DPI, height / DPI, dpi=DPI)
+        ax = fig.subplots()
+        setup_particle_axes(ax, view)
+        if color == "speed":
+            colourer.decorate(fig, [ax], [first])
+        elif color == "species":
+            colourer.decorate(fig, [ax], [first, run.snapshot(-1)])
+        writer = iio.get_writer(path, format="FFMPEG", mode="I", fps=fps, codec="libx264",
+                                pixelformat="yuv420p", macro_block_size=BLOCK, quality=8,
+                                ffmpeg_log_level="error")
+        try:
+            coll = None
+            for k in range(len(run.snapshot_times)):
+                snap = first if k == 0 else run.snapshot(k)
+                if coll is not None:
+                    coll.remove()
+                coll = draw_particles(ax, view, snap, colourer.colours(snap))
+                ax.set_title(_time_title(snap["time"]))
+                fig.canvas.draw()
+                if k == 0:
+                    fig.set_layout_engine("none")  # freeze the layout: every frame the same
+                writer.append_data(_frame(fig, width, height))
+                frames += 1
+        finally:
+            writer.close()
+    return frames, width, height
 
 
 def _frame(fig, width: int, height: int) -> np.ndarray:

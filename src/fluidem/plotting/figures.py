@@ -405,13 +405,15 @@ def draw_energy(run: RunData, options: PlotOptions):
     p = run.probes
     t = p["time_s"]
     kinetic = p["kinetic_J"]
-    rotational = p.get("rotational_J", np.zeros_like(t))
     pe = p["potential_J"]
     finite = np.flatnonzero(np.isfinite(pe))
     pe_rel = pe - (pe[finite[-1]] if len(finite) else 0.0)
     fig, (ax,) = _trace_axes()
     ax.plot(t, kinetic, label="kinetic")
-    ax.plot(t, rotational, label="rotational")
+    rotational = np.zeros_like(t)
+    if "rotational_J" in p:  # hard-sphere runs without rotation may leave it out
+        rotational = p["rotational_J"]
+        ax.plot(t, rotational, label="rotational")
     ax.plot(t, pe_rel, label="potential − final potential")
     ax.plot(t, kinetic + rotational + pe_rel, color="k", lw=1.8, label="sum")
     ax.set_ylabel("energy [J]")

@@ -80,7 +80,8 @@ class RunData:
 
     @property
     def species_names(self) -> list[str]:
-        return [str(s.get("name", f"species {k}")) for k, s in enumerate(self.case.get("particles", {}).get("species", []))]
+        species = self.case.get("particles", {}).get("species", [])
+        return [str(s.get("name", f"species {k}")) for k, s in enumerate(species)]
 
     def boxes(self) -> list[dict]:
         """Box walls as dicts: ``lower`` [m] (3,), ``upper`` [m] (3,), ``open_top``, ``name``."""

@@ -84,14 +84,6 @@ def test_angular_momentum_is_conserved_without_friction(make_engine, contact_law
     assert l_err < L_TOL, f"angular momentum changed by {l_err:.2e}"
 
 
-LEVER_ARM_BUG = (
-    "engine bug: pair torque uses lever arm a_i (T_i = a_i (−n × F_t), _softsphere_kernels._pair) instead of "
-    "Sun 2007 eq. 24 (T_i = −½ r_ij × F_t); the levers sum to a_i + a_j, not |r_ij|, so each frictional "
-    "contact adds −δ n × F_t to the total angular momentum"
-)
-
-
-@pytest.mark.xfail(reason=LEVER_ARM_BUG, strict=True)
 @pytest.mark.parametrize("model", ["linear_spring_dashpot", "hertz_mindlin"])
 def test_angular_momentum_is_conserved_with_friction(make_engine, contact_law, model):
     """Σ r × m v + I ω about the origin, spins included, with frictional (tangential) contacts."""
@@ -99,7 +91,6 @@ def test_angular_momentum_is_conserved_with_friction(make_engine, contact_law, m
     assert l_err < L_TOL, f"angular momentum changed by {l_err:.2e}"
 
 
-@pytest.mark.xfail(reason=LEVER_ARM_BUG, strict=True)
 @pytest.mark.parametrize("model", ["linear_spring_dashpot", "hertz_mindlin"])
 def test_pair_contact_exerts_no_net_moment(two_particles, model):
     """One frictional contact, one instant: Σ_k (r_k × F_k + T_k) = 0 about any point.

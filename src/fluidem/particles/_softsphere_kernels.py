@@ -55,9 +55,13 @@ def _pair(i, j, p, pos, vel, omega, radius, mass, species, pp, hist, dt, update)
     nz = rz * inv_r
     m_eff = mass[i] * mass[j] / (mass[i] + mass[j])
     r_eff = radius[i] * radius[j] / (radius[i] + radius[j])
-    wx = radius[i] * omega[i, 0] + radius[j] * omega[j, 0]
-    wy = radius[i] * omega[i, 1] + radius[j] * omega[j, 1]
-    wz = radius[i] * omega[i, 2] + radius[j] * omega[j, 2]
+    # lever arms a_i r/(a_i + a_j) and a_j r/(a_i + a_j): they meet at one contact point and add up
+    # to the centre distance (Sun 2007 eq. 24 takes r/2 for equal spheres), so friction conserves
+    # angular momentum; the contact-point velocity (eq. 19) uses the same levers.
+    lever = r / cut
+    wx = (radius[i] * omega[i, 0] + radius[j] * omega[j, 0]) * lever
+    wy = (radius[i] * omega[i, 1] + radius[j] * omega[j, 1]) * lever
+    wz = (radius[i] * omega[i, 2] + radius[j] * omega[j, 2]) * lever
     fn, ftx, fty, ftz, hx, hy, hz = contact_force(
         pp[species[i], species[j]], cut - r, nx, ny, nz,
         vel[i, 0] - vel[j, 0], vel[i, 1] - vel[j, 1], vel[i, 2] - vel[j, 2],
@@ -65,9 +69,10 @@ def _pair(i, j, p, pos, vel, omega, radius, mass, species, pp, hist, dt, update)
     hist[p, 0] = hx
     hist[p, 1] = hy
     hist[p, 2] = hz
-    # torque on i: (−a_i n) × F_t = a_i (−n × F_t); on j: (a_j n) × (−F_t) = a_j (−n × F_t)  (Sun 2007 eq. 24)
+    # torque on i: (−ℓ_i n) × F_t = ℓ_i (−n × F_t); on j: (ℓ_j n) × (−F_t) = ℓ_j (−n × F_t), ℓ = a r/(a_i + a_j);
+    # the caller multiplies by a_i or a_j (Sun 2007 eq. 24 with the levers above)
     return (True, fn * nx + ftx, fn * ny + fty, fn * nz + ftz,
-            -(ny * ftz - nz * fty), -(nz * ftx - nx * ftz), -(nx * fty - ny * ftx))
+            -(ny * ftz - nz * fty) * lever, -(nz * ftx - nx * ftz) * lever, -(nx * fty - ny * ftx) * lever)
 
 
 @njit(cache=True, error_model="numpy", fastmath=True)

@@ -7,11 +7,14 @@ Public surface::
     sim = fd.Simulation(case, out_dir="runs/pour")
     sim.run(until=0.5)
 """
+from ._threads import prefer_openmp
 from .case import Case, load_case
 from .errors import CaseError
 from .schedule import Every, EveryTime
 
 __version__ = "0.1.0"
+
+prefer_openmp()
 
 
 def __getattr__(name):

@@ -8,6 +8,8 @@ dense bed   The peer benchmark of shared/PEERS.md: monodisperse spheres d = 4 mm
             closed box, loaded settled and at rest. The settled beds are made once by
             this engine (lattice → settle → quench) and cached.
 pour        The built-in 2D ``pour`` case (500 particles), stepping from its start.
+gas step    One gas-phase step on the 15 × 25, 39 × 60 and 150 × 300 grids
+            (``fluidem.gas.gas_step_benchmark``: Hoomans 1996 orifice bed).
 
 Only the stepping loop is timed. Results are particle-steps per second.
 """
@@ -150,7 +152,8 @@ def time_engine(eng, steps: int, target_seconds: float = 5.0) -> tuple[int, floa
     return steps, time.perf_counter() - t0
 
 
-def run_bench(sizes="10000,100000", threads="1,2", steps: int = 0, as_json: str | None = None) -> list[dict]:
+def run_bench(sizes="10000,100000", threads="1,2", steps: int = 0, as_json: str | None = None,
+              gas: bool = True) -> list[dict]:
     import numba
 
     from .analysis.probes import contacts
@@ -178,6 +181,14 @@ def run_bench(sizes="10000,100000", threads="1,2", steps: int = 0, as_json: str 
                      "wall_s": wall, "particle_steps_per_s": eng.state.n * nsteps / wall,
                      "contacts_per_particle": contacts(eng)["coordination"]})
         _print_row(rows[-1], header=not rows[:-1])
+    if gas:
+        from .gas import gas_step_benchmark
+
+        print(f"\n{'gas step':42s} {'grid':>8s} {'dt s':>8s} {'ms/step':>8s} {'iterations':>10s}")
+        for r in gas_step_benchmark():
+            rows.append(r)
+            print(f"{r['problem']:42s} {r['grid']:>8s} {r['dt_s']:8.1e} {r['ms_per_step']:8.3f} "
+                  f"{r['iterations_per_step']:10.2f}", flush=True)
     if as_json:
         Path(as_json).write_text(json.dumps(rows, indent=2) + "\n")
     return rows

@@ -81,7 +81,7 @@ def cmd_cases(args) -> int:
 def cmd_bench(args) -> int:
     from .bench import run_bench
 
-    run_bench(sizes=args.sizes, threads=args.threads, steps=args.steps, as_json=args.json)
+    run_bench(sizes=args.sizes, threads=args.threads, steps=args.steps, as_json=args.json, gas=not args.no_gas)
     return 0
 
 
@@ -111,6 +111,7 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--threads", default="1,2", help="thread counts, comma separated")
     b.add_argument("--steps", type=int, default=0, help="timed steps per problem (default: about 5 s of work)")
     b.add_argument("--json", metavar="FILE", help="also write the results as JSON")
+    b.add_argument("--no-gas", action="store_true", help="skip the gas-step timings")
     b.set_defaults(func=cmd_bench)
 
     from .cli_plot import add_commands

@@ -5,7 +5,8 @@ Arrays are the solver's padded arrays (``grid.py``): centre arrays ``(nx + 2, ny
 with cell (i, j) at ``[i + 1, j + 1]``; ``U`` ``(nx + 5, ny + 4)`` with x-face (i, j)
 at ``[i + 2, j + 2]``; ``V`` ``(nx + 4, ny + 5)`` with y-face (i, j) at ``[i + 2, j + 2]``.
 Boundary behaviour comes only from the integer cell flags (Hoomans 1996 Table 1) and
-the face kinds derived from them at set-up.
+the face kinds derived from them at set-up. The solver keeps most arrays in a few stacks
+(``C``, ``FU``, ``FV``, ...; slots named below): fewer kernel arguments compile faster.
 
 Symbols inside kernels: ``E`` voidage ε, ``RHO`` gas density ρ_g, ``P`` pressure relative to
 the reference pressure p_ref (so that small differences of a large pressure keep their digits),
@@ -24,9 +25,8 @@ import numpy as np
 from numba import njit
 
 from ._operators import face_value, normal_stresses_at_centre, shear_stress_at_corner
+from .grid import FREE_SLIP, INFLOW, NO_SLIP, PERIODIC  # cell flags, Hoomans 1996 Table 1
 
-# cell flags (grid.py)
-FREE_SLIP, NO_SLIP, INFLOW, PRESSURE, OUTFLOW, PERIODIC = 2, 3, 4, 5, 6, 8
 # face kinds: momentum solved / value fixed (wall, inflow) / continuous outflow / periodic duplicate of face 0
 SOLVED, FIXED, OUTFLOW_FACE, COPY = 0, 1, 2, 3
 # ghost rules of centre scalars, chosen per flag: zero gradient / prescribed value / periodic wrap
@@ -38,8 +38,8 @@ R_NONE, R_COPY, R_FIXED, R_WRAP = 0, 1, 2, 3
 def fill_centre_ghosts(q, flags, rule, fixed, nx, ny):
     """Boundary-cell values of a centre scalar from the flags: ``rule[flag]`` is R_COPY
     (adjacent interior value), R_FIXED (``fixed`` at that cell) or R_WRAP (opposite side).
-    Corners: the opposite corner cell when both sides are periodic, else the mean of the
-    two boundary cells beside them."""
+    Corners (flag 7, no condition of their own): wrapped like the boundary cells beside them
+    when a side is periodic, else the mean of those two boundary cells."""
     for j in range(1, ny + 1):
         r = rule[flags[0, j]]
         if r == R_COPY:
@@ -70,12 +70,16 @@ def fill_centre_ghosts(q, flags, rule, fixed, nx, ny):
             q[i, ny + 1] = fixed[i, ny + 1]
         elif r == R_WRAP:
             q[i, ny + 1] = q[i, 1]
-    both = flags[0, 1] == PERIODIC and flags[1, 0] == PERIODIC
-    if both:
-        q[0, 0] = q[nx, ny]
-        q[nx + 1, 0] = q[1, ny]
-        q[0, ny + 1] = q[nx, 1]
-        q[nx + 1, ny + 1] = q[1, 1]
+    if flags[0, 1] == PERIODIC:  # wrap the bottom and top boundary rows along x
+        q[0, 0] = q[nx, 0]
+        q[nx + 1, 0] = q[1, 0]
+        q[0, ny + 1] = q[nx, ny + 1]
+        q[nx + 1, ny + 1] = q[1, ny + 1]
+    elif flags[1, 0] == PERIODIC:  # wrap the left and right boundary columns along y
+        q[0, 0] = q[0, ny]
+        q[nx + 1, 0] = q[nx + 1, ny]
+        q[0, ny + 1] = q[0, 1]
+        q[nx + 1, ny + 1] = q[nx + 1, 1]
     else:
         q[0, 0] = 0.5 * (q[1, 0] + q[0, 1])
         q[nx + 1, 0] = 0.5 * (q[nx, 0] + q[nx + 1, 1])
@@ -149,8 +153,9 @@ def fill_face_ghosts(U, V, flags, nx, ny):
 
 # ---------------------------------------------------------------------------- stacked work arrays
 # The solver keeps its arrays in a few stacks (fewer kernel arguments compile much faster).
-# C  (5, nx + 2, ny + 2) centre arrays with one ring of boundary cells:
-C_P, C_RHO, C_E, C_PFIX, C_EFIX = 0, 1, 2, 3, 4  # gauge pressure, density, voidage, prescribed p', fixed ε
+# C  (7, nx + 2, ny + 2) centre arrays with one ring of boundary cells: gauge pressure, density,
+# voidage, prescribed gauge pressure at t + dt and at t, fixed voidage, (ερ) at t
+C_P, C_RHO, C_E, C_PFIX, C_PFIX_OLD, C_EFIX, C_RO_OLD = 0, 1, 2, 3, 4, 5, 6
 # FU (7, nx + 1, ny), FV (7, nx, ny + 1) face arrays without ghosts:
 F_OLD, F_EX, F_BETA, F_RHS, F_FIX, F_WOUT, F_D = 0, 1, 2, 3, 4, 5, 6
 # (velocity at t, explicit terms, β, β u_s + source, fixed value, outflow share, D = ε_f / a)
@@ -167,7 +172,8 @@ L_LP, L_UP, L_PERM_R, L_PERM_C = 0, 1, 2, 3
 # fpar / ipar / out slots
 (F_GX, F_GY, F_DT, F_DX, F_DY, F_AX, F_AY, F_VOL, F_COMP, F_RHOC, F_TOL, F_REUSE, F_SLOW, F_PREF,
  F_MU) = range(15)
-I_NX, I_NY, I_MAXIT, I_PIN, I_HAVE_LU, I_ITER, I_CHECKED, I_REFACTORED, I_RESUME, I_SCHEME = range(10)
+(I_NX, I_NY, I_MAXIT, I_PIN, I_HAVE_LU, I_ITER, I_CHECKED, I_REFACTORED, I_RESUME, I_SCHEME, I_BANDED, I_BW,
+ I_NFACT) = range(13)
 O_RES, O_QREF, O_IN, O_OUT, O_ACC, O_MASS, O_COURANT, O_REL, O_PREV = range(9)
 # iterate status
 CONVERGED, NEED_FACTORS, MAX_ITERATIONS, NOT_FINITE = 0, 1, 2, 3
@@ -175,24 +181,52 @@ MASS_FLOOR = 1e-4  # share of (gas mass / dt) in the reference flow of the mass 
 
 
 @njit(cache=True, error_model="numpy")
+def copy_into(dst, src):
+    """Copy ``src`` into the middle of the (padded) ``dst``, e.g. u (nx + 1, ny) into U
+    (nx + 5, ny + 4). A loop: slice assignment costs much compile time."""
+    i0 = (dst.shape[0] - src.shape[0]) // 2
+    j0 = (dst.shape[1] - src.shape[1]) // 2
+    for i in range(src.shape[0]):
+        for j in range(src.shape[1]):
+            dst[i0 + i, j0 + j] = src[i, j]
+
+
+@njit(cache=True, error_model="numpy")
+def copy_from(dst, src):
+    """Copy the middle of the (padded) ``src`` into ``dst``."""
+    i0 = (src.shape[0] - dst.shape[0]) // 2
+    j0 = (src.shape[1] - dst.shape[1]) // 2
+    for i in range(dst.shape[0]):
+        for j in range(dst.shape[1]):
+            dst[i, j] = src[i0 + i, j0 + j]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def face_axis(centre, K):
+    """(da, db) of a face stack ``K`` (or ``F``) against a padded centre array (nx + 2, ny + 2):
+    (1, 0) for x-faces (nx + 1, ny), (0, 1) for y-faces (nx, ny + 1). Face (i, j) lies between
+    the padded cells (i + 1 − da, j + 1 − db) and (i + 1, j + 1)."""
+    da = K.shape[1] - (centre.shape[0] - 2)
+    return da, 1 - da
+
+
+@njit(cache=True, error_model="numpy")
 def update_density(C, rho_factor, rho_const, p_ref):
     """ρ = (p' + p_ref) M/(RT) everywhere (Hoomans 1996 eq. 44; C[C_P] is the pressure relative
     to p_ref), or the constant density when rho_factor is 0."""
     P, RHO = C[C_P], C[C_RHO]
-    if rho_factor != 0.0:
-        for i in range(P.shape[0]):
-            for j in range(P.shape[1]):
-                RHO[i, j] = rho_factor * (P[i, j] + p_ref)
-    else:
-        RHO[:, :] = rho_const
+    for i in range(P.shape[0]):
+        for j in range(P.shape[1]):
+            RHO[i, j] = rho_factor * (P[i, j] + p_ref) if rho_factor != 0.0 else rho_const
 
 
 @njit(cache=True, error_model="numpy")
-def boundary_cells(C, flags, RULES, fpar, ipar):
-    """Boundary cells of voidage and pressure from the flags, then the density everywhere."""
+def boundary_cells(C, pfix, flags, RULES, fpar, ipar):
+    """Boundary cells of voidage and pressure (prescribed values from ``pfix``) from the flags,
+    then the density everywhere."""
     nx, ny = ipar[I_NX], ipar[I_NY]
     fill_centre_ghosts(C[C_E], flags, RULES[RULE_E], C[C_EFIX], nx, ny)
-    fill_centre_ghosts(C[C_P], flags, RULES[RULE_P], C[C_PFIX], nx, ny)
+    fill_centre_ghosts(C[C_P], flags, RULES[RULE_P], pfix, nx, ny)
     update_density(C, fpar[F_COMP], fpar[F_RHOC], fpar[F_PREF])
 
 
@@ -207,15 +241,13 @@ def face_voidage(E, la, lb, ra, rb, kind, sign):
 
 
 @njit(cache=True, error_model="numpy")
-def _mass_flux(W, Q, E, RHO, K, axis, n1, n2):
+def _mass_flux(W, Q, E, RHO, K):
     """Q = (ερ)_f w on the faces of one direction [kg m^-2 s^-1]."""
     kind, sign = K[K_KIND], K[K_SIGN]
-    for i in range(n1):
-        for j in range(n2):
-            if axis == 0:
-                la, lb, ra, rb = i, j + 1, i + 1, j + 1
-            else:
-                la, lb, ra, rb = i + 1, j, i + 1, j + 1
+    da, db = face_axis(E, K)
+    for i in range(kind.shape[0]):
+        for j in range(kind.shape[1]):
+            la, lb, ra, rb = i + 1 - da, j + 1 - db, i + 1, j + 1
             ef = face_voidage(E, la, lb, ra, rb, kind[i, j], sign[i, j])
             Q[i + 2, j + 2] = ef * 0.5 * (RHO[la, lb] + RHO[ra, rb]) * W[i + 2, j + 2]
 
@@ -223,8 +255,8 @@ def _mass_flux(W, Q, E, RHO, K, axis, n1, n2):
 @njit(cache=True, error_model="numpy")
 def mass_fluxes(U, V, E, RHO, G, H, KU, KV, flags, nx, ny):
     """G = (ερ)_f u on x-faces and H = (ερ)_f v on y-faces [kg m^-2 s^-1], ghosts filled like velocities."""
-    _mass_flux(U, G, E, RHO, KU, 0, nx + 1, ny)
-    _mass_flux(V, H, E, RHO, KV, 1, nx, ny + 1)
+    _mass_flux(U, G, E, RHO, KU)
+    _mass_flux(V, H, E, RHO, KV)
     fill_face_ghosts(G, H, flags, nx, ny)
 
 
@@ -279,32 +311,110 @@ def explicit_momentum(U, V, G, H, E, mu, dx, dy, scheme, ukind, vkind, exu, exv,
 
 
 @njit(cache=True, error_model="numpy")
-def begin_step(U, V, G, H, C, FU, FV, KU, KV, flags, RULES, fpar, ipar):
-    """Ghosts of the old state (pressure, voidage, velocity), its mass fluxes and the
-    explicit momentum terms FU[F_EX], FV[F_EX]."""
+def _outflow_shares(F, K, C, area, total):
+    """Outward mass flux through the interior face next to each continuous-outflow face, at t
+    (zero normal gradient), into F[F_WOUT]; adds them to ``total`` = [sum, sum of |.|, area]."""
+    RHO, E = C[C_RHO], C[C_E]
+    kind, sign, old, share = K[K_KIND], K[K_SIGN], F[F_OLD], F[F_WOUT]
+    da, db = face_axis(C[0], K)
+    n1, n2 = kind.shape[0], kind.shape[1]
+    for i in range(n1):
+        for j in range(n2):
+            if kind[i, j] != OUTFLOW_FACE:
+                share[i, j] = 0.0
+                continue
+            s = sign[i, j]
+            w = old[min(max(i + s * da, 0), n1 - 1), min(max(j + s * db, 0), n2 - 1)]
+            ca, cb = (i + 1, j + 1) if s > 0 else (i + 1 - da, j + 1 - db)  # the interior cell
+            f = -s * w * E[ca, cb] * RHO[ca, cb] * area
+            share[i, j] = f
+            total[0] += f
+            total[1] += abs(f)
+            total[2] += area
+
+
+@njit(cache=True, error_model="numpy")
+def _normalise_shares(F, K, area, total):
+    kind, share = K[K_KIND], F[F_WOUT]
+    by_flow = total[0] > 1e-9 * total[1] and total[0] > 0.0
+    for i in range(share.shape[0]):
+        for j in range(share.shape[1]):
+            if kind[i, j] == OUTFLOW_FACE:
+                share[i, j] = share[i, j] / total[0] if by_flow else area / total[2]
+
+
+@njit(cache=True, error_model="numpy")
+def begin_step(p, rho, u, v, eps_old, eps_new, U, V, G, H, C, FU, FV, KU, KV, flags, RULES, fpar, ipar):
+    """Load the state at t (p, rho, u, v, eps_old; p as gauge pressure), fill its ghosts, its
+    mass fluxes and the explicit momentum terms FU[F_EX], FV[F_EX]; the shares of the
+    continuous outflow; then the new voidage and the boundary cells at t + dt."""
     nx, ny = ipar[I_NX], ipar[I_NY]
-    boundary_cells(C, flags, RULES, fpar, ipar)
+    p_ref = fpar[F_PREF]
+    P, E, RO = C[C_P], C[C_E], C[C_RO_OLD]
+    for i in range(nx):
+        for j in range(ny):
+            P[i + 1, j + 1] = p[i, j] - p_ref
+            E[i + 1, j + 1] = eps_old[i, j]
+            RO[i + 1, j + 1] = eps_old[i, j] * rho[i, j]
+    copy_into(U, u)
+    copy_into(V, v)
+    copy_into(FU[F_OLD], u)
+    copy_into(FV[F_OLD], v)
+    boundary_cells(C, C[C_PFIX_OLD], flags, RULES, fpar, ipar)
     fill_face_ghosts(U, V, flags, nx, ny)
-    mass_fluxes(U, V, C[C_E], C[C_RHO], G, H, KU, KV, flags, nx, ny)
-    explicit_momentum(U, V, G, H, C[C_E], fpar[F_MU], fpar[F_DX], fpar[F_DY], ipar[I_SCHEME], KU[K_KIND],
+    mass_fluxes(U, V, E, C[C_RHO], G, H, KU, KV, flags, nx, ny)
+    explicit_momentum(U, V, G, H, E, fpar[F_MU], fpar[F_DX], fpar[F_DY], ipar[I_SCHEME], KU[K_KIND],
                       KV[K_KIND], FU[F_EX], FV[F_EX], nx, ny)
+    total = np.zeros(3)
+    _outflow_shares(FU, KU, C, fpar[F_AX], total)
+    _outflow_shares(FV, KV, C, fpar[F_AY], total)
+    if total[2] > 0.0:
+        _normalise_shares(FU, KU, fpar[F_AX], total)
+        _normalise_shares(FV, KV, fpar[F_AY], total)
+    for i in range(nx):
+        for j in range(ny):
+            E[i + 1, j + 1] = eps_new[i, j]
+    boundary_cells(C, C[C_PFIX], flags, RULES, fpar, ipar)
+
+
+@njit(cache=True, error_model="numpy")
+def finite_nonnegative(a, b):
+    """True when every value of the 2D arrays a and b is finite and >= 0."""
+    for q in (a, b):
+        for i in range(q.shape[0]):
+            for j in range(q.shape[1]):
+                x = q[i, j]
+                if not (x >= 0.0 and x < np.inf):
+                    return False
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def end_step(p, rho, u, v, U, V, C, p_ref):
+    """Write the fields at t + dt back into the state arrays (p as absolute pressure)."""
+    nx, ny = p.shape
+    P, RHO = C[C_P], C[C_RHO]
+    for i in range(nx):
+        for j in range(ny):
+            p[i, j] = P[i + 1, j + 1] + p_ref
+            rho[i, j] = RHO[i + 1, j + 1]
+    copy_from(u, U)
+    copy_from(v, V)
 
 
 # ---------------------------------------------------------------------------- one iteration
 @njit(cache=True, error_model="numpy")
-def _predict(W, C, F, K, axis, gravity, dt, h, n1, n2):
-    """Momentum on the faces of one direction (axis 0: x-faces, W = U; axis 1: y-faces, W = V)."""
+def _predict(W, C, F, K, gravity, dt, h):
+    """Momentum on the faces of one direction (x-faces: W = U, F = FU; y-faces: V, FV)."""
     P, RHO, E = C[C_P], C[C_RHO], C[C_E]
     kind = K[K_KIND]
     old, ex, beta, rhs, fix, D = F[F_OLD], F[F_EX], F[F_BETA], F[F_RHS], F[F_FIX], F[F_D]
-    for i in range(n1):
-        for j in range(n2):
+    da, db = face_axis(P, K)
+    for i in range(kind.shape[0]):
+        for j in range(kind.shape[1]):
             k = kind[i, j]
             if k == SOLVED:
-                if axis == 0:  # cells (i-1, j) and (i, j)
-                    la, lb, ra, rb = i, j + 1, i + 1, j + 1
-                else:  # cells (i, j-1) and (i, j)
-                    la, lb, ra, rb = i + 1, j, i + 1, j + 1
+                la, lb, ra, rb = i + 1 - da, j + 1 - db, i + 1, j + 1
                 ef = 0.5 * (E[la, lb] + E[ra, rb])
                 m = ef * 0.5 * (RHO[la, lb] + RHO[ra, rb])
                 a = m / dt + beta[i, j]
@@ -320,7 +430,7 @@ def _predict(W, C, F, K, axis, gravity, dt, h, n1, n2):
 
 
 @njit(cache=True, error_model="numpy")
-def _fluxes(W, C, K, row_of, R, axis, area, n1, n2):
+def _fluxes(W, C, K, row_of, R, area):
     """Add the mass flux A (ερ)_f w of every face of one direction, except outflow faces and
     periodic duplicates, to the residuals of the cells either side. Returns (inflow, outflow,
     net inflow, has outflow faces) through the boundary faces of this direction [kg/s]."""
@@ -330,18 +440,16 @@ def _fluxes(W, C, K, row_of, R, axis, area, n1, n2):
     outflow = 0.0
     net_in = 0.0
     has_outflow = False
-    for i in range(n1):
-        for j in range(n2):
+    da, db = face_axis(E, K)
+    for i in range(kind.shape[0]):
+        for j in range(kind.shape[1]):
             k = kind[i, j]
             if k == COPY:
                 continue
             if k == OUTFLOW_FACE:
                 has_outflow = True
                 continue
-            if axis == 0:
-                la, lb, ra, rb = i, j + 1, i + 1, j + 1
-            else:
-                la, lb, ra, rb = i + 1, j, i + 1, j + 1
+            la, lb, ra, rb = i + 1 - da, j + 1 - db, i + 1, j + 1
             w = W[i + 2, j + 2]
             f = area * face_voidage(E, la, lb, ra, rb, k, sign[i, j]) * 0.5 * (RHO[la, lb] + RHO[ra, rb]) * w
             rl = row_of[la, lb]
@@ -362,23 +470,21 @@ def _fluxes(W, C, K, row_of, R, axis, area, n1, n2):
 
 
 @njit(cache=True, error_model="numpy")
-def _outflow(W, C, F, K, row_of, R, axis, area, need, n1, n2):
+def _outflow(W, C, F, K, row_of, R, area, need):
     """Continuous-outflow faces of one direction carry their share F[F_WOUT] of the outflow
     ``need`` [kg/s]; their velocity follows from the interior cell's ε ρ. Returns (in, out)."""
     RHO, E = C[C_RHO], C[C_E]
     kind, sign, share = K[K_KIND], K[K_SIGN], F[F_WOUT]
     inflow = 0.0
     outflow = 0.0
-    for i in range(n1):
-        for j in range(n2):
+    da, db = face_axis(E, K)
+    for i in range(kind.shape[0]):
+        for j in range(kind.shape[1]):
             if kind[i, j] != OUTFLOW_FACE:
                 continue
             s = sign[i, j]
             fout = share[i, j] * need
-            if axis == 0:
-                la, lb, ra, rb = i, j + 1, i + 1, j + 1
-            else:
-                la, lb, ra, rb = i + 1, j, i + 1, j + 1
+            la, lb, ra, rb = i + 1 - da, j + 1 - db, i + 1, j + 1
             ca, cb = (la, lb) if s < 0 else (ra, rb)  # the interior cell
             f = -s * fout  # flux along +x (+y)
             W[i + 2, j + 2] = f / (area * E[ca, cb] * RHO[ca, cb])
@@ -396,7 +502,7 @@ def _outflow(W, C, F, K, row_of, R, axis, area, need, n1, n2):
 
 
 @njit(cache=True, error_model="numpy")
-def predict_residual(U, V, C, FU, FV, KU, KV, ro_old, row_of, flags, R, fpar, ipar):
+def predict_residual(U, V, C, FU, FV, KU, KV, row_of, flags, R, fpar, ipar):
     """Face velocities from the momentum balance at the current pressure, then the cell
     continuity residuals (Hoomans 1996 eqs 42-43).
 
@@ -414,28 +520,28 @@ def predict_residual(U, V, C, FU, FV, KU, KV, ro_old, row_of, flags, R, fpar, ip
     """
     nx, ny = ipar[I_NX], ipar[I_NY]
     dt, dx, dy, vol = fpar[F_DT], fpar[F_DX], fpar[F_DY], fpar[F_VOL]
-    _predict(U, C, FU, KU, 0, fpar[F_GX], dt, dx, nx + 1, ny)
-    _predict(V, C, FV, KV, 1, fpar[F_GY], dt, dy, nx, ny + 1)
-    RHO, E = C[C_RHO], C[C_E]
+    _predict(U, C, FU, KU, fpar[F_GX], dt, dx)
+    _predict(V, C, FV, KV, fpar[F_GY], dt, dy)
+    RHO, E, RO = C[C_RHO], C[C_E], C[C_RO_OLD]
     acc = 0.0
     acc_abs = 0.0
     mass = 0.0
     for i in range(nx):
         for j in range(ny):
             er = E[i + 1, j + 1] * RHO[i + 1, j + 1]
-            a = vol * (er - ro_old[i, j]) / dt
+            a = vol * (er - RO[i + 1, j + 1]) / dt
             R[i * ny + j] = a
             acc += a
             acc_abs += abs(a)
             mass += vol * er
-    in_x, out_x, net_x, of_x = _fluxes(U, C, KU, row_of, R, 0, fpar[F_AX], nx + 1, ny)
-    in_y, out_y, net_y, of_y = _fluxes(V, C, KV, row_of, R, 1, fpar[F_AY], nx, ny + 1)
+    in_x, out_x, net_x, of_x = _fluxes(U, C, KU, row_of, R, fpar[F_AX])
+    in_y, out_y, net_y, of_y = _fluxes(V, C, KV, row_of, R, fpar[F_AY])
     inflow = in_x + in_y
     outflow = out_x + out_y
     if of_x or of_y:
         need = net_x + net_y - acc
-        a, b = _outflow(U, C, FU, KU, row_of, R, 0, fpar[F_AX], need, nx + 1, ny)
-        c, d = _outflow(V, C, FV, KV, row_of, R, 1, fpar[F_AY], need, nx, ny + 1)
+        a, b = _outflow(U, C, FU, KU, row_of, R, fpar[F_AX], need)
+        c, d = _outflow(V, C, FV, KV, row_of, R, fpar[F_AY], need)
         inflow += a + c
         outflow += b + d
     fill_face_ghosts(U, V, flags, nx, ny)
@@ -456,19 +562,17 @@ def predict_residual(U, V, C, FU, FV, KU, KV, ro_old, row_of, flags, R, fpar, ip
 
 # ---------------------------------------------------------------------------- pressure correction
 @njit(cache=True, error_model="numpy")
-def _assemble_faces(data, pos, W, C, F, K, axis, area, h, comp, n1, n2):
+def _assemble_faces(data, pos, W, C, F, K, area, h, comp):
     """Face terms of the pressure matrix for one direction (see ``assemble_pressure``)."""
     RHO, E = C[C_RHO], C[C_E]
     kind, sign, D = K[K_KIND], K[K_SIGN], F[F_D]
-    for i in range(n1):
-        for j in range(n2):
+    da, db = face_axis(E, K)
+    for i in range(kind.shape[0]):
+        for j in range(kind.shape[1]):
             k = kind[i, j]
             if k == COPY or k == OUTFLOW_FACE:
                 continue
-            if axis == 0:
-                la, lb, ra, rb = i, j + 1, i + 1, j + 1
-            else:
-                la, lb, ra, rb = i + 1, j, i + 1, j + 1
+            la, lb, ra, rb = i + 1 - da, j + 1 - db, i + 1, j + 1
             w = W[i + 2, j + 2]
             ef = face_voidage(E, la, lb, ra, rb, k, sign[i, j])
             c = area * ef * 0.5 * (RHO[la, lb] + RHO[ra, rb]) * D[i, j] / h
@@ -501,13 +605,14 @@ def assemble_pressure(data, diag_pos, upos, vpos, pin_pos, U, V, C, FU, FV, KU, 
     nx, ny, pin_diag = ipar[I_NX], ipar[I_NY], ipar[I_PIN]
     comp, dt, vol = fpar[F_COMP], fpar[F_DT], fpar[F_VOL]
     E = C[C_E]
-    data[:] = 0.0
+    for k in range(data.size):
+        data[k] = 0.0
     if comp != 0.0:
         for i in range(nx):
             for j in range(ny):
                 data[diag_pos[i * ny + j]] += comp * E[i + 1, j + 1] * vol / dt
-    _assemble_faces(data, upos, U, C, FU, KU, 0, fpar[F_AX], fpar[F_DX], comp, nx + 1, ny)
-    _assemble_faces(data, vpos, V, C, FV, KV, 1, fpar[F_AY], fpar[F_DY], comp, nx, ny + 1)
+    _assemble_faces(data, upos, U, C, FU, KU, fpar[F_AX], fpar[F_DX], comp)
+    _assemble_faces(data, vpos, V, C, FV, KV, fpar[F_AY], fpar[F_DY], comp)
     if pin_diag >= 0:
         for p in pin_pos:
             data[p] = 0.0
@@ -538,18 +643,78 @@ def lu_solve(LUI, Li, Lx, Ui, Ux, Ud, b, x, w):
 
 
 @njit(cache=True, error_model="numpy")
-def iterate(U, V, C, FU, FV, KU, KV, ro_old, row_of, flags, RULES, VEC, MAT, diag_pos, upos, vpos, pin_pos,
-            LUI, Li, Lx, Ui, Ux, Ud, fpar, ipar, out):
+def band_factor(data, indices, indptr, order, bw, B):
+    """LU factors, without pivoting, of the CSC matrix (data, indices, indptr) with rows and
+    columns renumbered by ``order`` into a band of half-width ``bw``: B (n, 2 bw + 1) with
+    B[i, j − i + bw] = A[i, j]; L below the diagonal (unit diagonal), U on and above.
+
+    Safe without pivoting because the pressure matrix is diagonally dominant; returns the
+    smallest |pivot| relative to the largest |diagonal| so that the caller can check.
+    """
+    n = B.shape[0]
+    for i in range(n):
+        for j in range(B.shape[1]):
+            B[i, j] = 0.0
+    for col in range(n):
+        c = order[col]
+        for q in range(indptr[col], indptr[col + 1]):
+            r = order[indices[q]]
+            B[r, c - r + bw] += data[q]
+    dmax = 0.0
+    for i in range(n):
+        dmax = max(dmax, abs(B[i, bw]))
+    pmin = np.inf
+    for k in range(n):
+        piv = B[k, bw]
+        pmin = min(pmin, abs(piv))
+        if piv == 0.0:
+            return 0.0
+        last = min(k + bw, n - 1)
+        for i in range(k + 1, last + 1):
+            lik = B[i, k - i + bw]
+            if lik == 0.0:
+                continue
+            lik /= piv
+            B[i, k - i + bw] = lik
+            for j in range(k + 1, last + 1):
+                B[i, j - i + bw] -= lik * B[k, j - k + bw]
+    return pmin / dmax if dmax > 0.0 else 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def band_solve(B, order, bw, b, x, w):
+    """x = A^-1 b with the band factors of ``band_factor``."""
+    n = B.shape[0]
+    for k in range(n):
+        w[order[k]] = b[k]
+    for i in range(n):
+        acc = w[i]
+        for k in range(max(0, i - bw), i):
+            acc -= B[i, k - i + bw] * w[k]
+        w[i] = acc
+    for i in range(n - 1, -1, -1):
+        acc = w[i]
+        for j in range(i + 1, min(i + bw, n - 1) + 1):
+            acc -= B[i, j - i + bw] * w[j]
+        w[i] = acc / B[i, bw]
+    for k in range(n):
+        x[k] = w[order[k]]
+
+
+@njit(cache=True, error_model="numpy")
+def iterate(U, V, C, FU, FV, KU, KV, row_of, flags, RULES, VEC, MAT, diag_pos, upos, vpos, pin_pos,
+            LUI, Li, Lx, Ui, Ux, Ud, B, order, csc_indices, csc_indptr, fpar, ipar, out):
     """Pressure-correction (Newton) iterations of one time step until the mass residual is below
     ``fpar[F_TOL]``.
 
     Each iteration: momentum prediction and continuity residual (``predict_residual``), then
     p' from the factorised pressure matrix and p += p'. The factors are those of an earlier
     matrix while it stays within ``F_REUSE`` (max norm) of the current one; when it does not,
-    or an iteration reduces the residual by less than ``F_SLOW``, the kernel returns
-    NEED_FACTORS with the current matrix in ``MAT[M_DATA]``; the caller factorises it and calls
-    again (``I_RESUME`` then skips straight to the solve). Otherwise it returns CONVERGED,
-    MAX_ITERATIONS or NOT_FINITE; the step's diagnostics are in ``out``.
+    or an iteration reduces the residual by less than ``F_SLOW``, the matrix is factorised
+    again: here, as a band (``band_factor``, ``ipar[I_BANDED]``), or else by the caller with
+    SuperLU: the kernel returns NEED_FACTORS with the current matrix in ``MAT[M_DATA]`` and is
+    called again (``I_RESUME`` then skips straight to the solve). Otherwise it returns
+    CONVERGED, MAX_ITERATIONS or NOT_FINITE; the step's diagnostics are in ``out``.
     """
     nx, ny, max_it, pin_diag = ipar[I_NX], ipar[I_NY], ipar[I_MAXIT], ipar[I_PIN]
     R, dp, work = VEC[V_R], VEC[V_DP], VEC[V_WORK]
@@ -558,8 +723,8 @@ def iterate(U, V, C, FU, FV, KU, KV, ro_old, row_of, flags, RULES, VEC, MAT, dia
     it = ipar[I_ITER]
     while True:
         if ipar[I_RESUME] == 0:
-            res, qref, fin, fout, acc, mass, courant = predict_residual(U, V, C, FU, FV, KU, KV, ro_old, row_of,
-                                                                        flags, R, fpar, ipar)
+            res, qref, fin, fout, acc, mass, courant = predict_residual(U, V, C, FU, FV, KU, KV, row_of, flags, R,
+                                                                        fpar, ipar)
             rel = res / qref if qref > 0.0 else 0.0
             out[O_RES], out[O_QREF], out[O_IN], out[O_OUT] = res, qref, fin, fout
             out[O_ACC], out[O_MASS], out[O_COURANT], out[O_REL] = acc, mass, courant, rel
@@ -588,15 +753,25 @@ def iterate(U, V, C, FU, FV, KU, KV, ro_old, row_of, flags, RULES, VEC, MAT, dia
                 need = True
             if need:
                 ipar[I_REFACTORED] = 1
-                ipar[I_RESUME] = 1
-                return NEED_FACTORS
+                if ipar[I_BANDED] == 1 and band_factor(data, csc_indices, csc_indptr, order, ipar[I_BW], B) > 1e-12:
+                    for k in range(data.size):
+                        factored[k] = data[k]
+                    ipar[I_HAVE_LU] = 1
+                    ipar[I_NFACT] += 1
+                else:  # SuperLU, by the caller (from now on, if the band had a poor pivot)
+                    ipar[I_BANDED] = 0
+                    ipar[I_RESUME] = 1
+                    return NEED_FACTORS
         ipar[I_RESUME] = 0
         out[O_PREV] = out[O_REL]
         for k in range(n):
             R[k] = -R[k]
         if pin_diag >= 0:
             R[0] = 0.0
-        lu_solve(LUI, Li, Lx, Ui, Ux, Ud, R, dp, work)
+        if ipar[I_BANDED] == 1:
+            band_solve(B, order, ipar[I_BW], R, dp, work)
+        else:
+            lu_solve(LUI, Li, Lx, Ui, Ux, Ud, R, dp, work)
         P = C[C_P]
         for i in range(nx):
             for j in range(ny):

@@ -8,19 +8,23 @@ kernels read only flags (and integer face kinds derived from them).
 
 Index layout (user-facing arrays, 0-based; ``nx = 3, ny = 2`` drawn)::
 
-        y
-        ^     v[0,2]        v[1,2]        v[2,2]           <- top boundary faces (j = ny)
-        |  +-----o------+------o------+------o------+
-        |  |             |             |             |
-        |  x   p[0,1]    x   p[1,1]    x   p[2,1]    x     x = u[i, 1], i = 0..nx
-        |  | u[0,1]      | u[1,1]      | u[2,1]      | u[3,1]
-        |  +-----o------+------o------+------o------+
-        |  |    v[0,1]   |    v[1,1]   |    v[2,1]   |
-        |  x   p[0,0]    x   p[1,0]    x   p[2,0]    x     o = v[i, j], j = 0..ny
-        |  | u[0,0]      | u[1,0]      | u[2,0]      | u[3,0]
-        |  +-----o------+------o------+------o------+
-        |       v[0,0]        v[1,0]        v[2,0]           <- bottom boundary faces (j = 0)
-        +--------------------------------------------------> x
+      y
+      ^        v[0,2]          v[1,2]          v[2,2]
+      |  +-------o-------+-------o-------+-------o-------+   y-faces j = ny (top boundary)
+      |  |               |               |               |
+      |  x     p[0,1]    x     p[1,1]    x     p[2,1]    x   x-faces of row 1: u[0..3, 1]
+      |  |               |               |               |
+      |  +-------o-------+-------o-------+-------o-------+   y-faces j = 1: v[0..2, 1]
+      |  |               |               |               |
+      |  x     p[0,0]    x     p[1,0]    x     p[2,0]    x   x-faces of row 0: u[0..3, 0]
+      |  |               |               |               |
+      |  +-------o-------+-------o-------+-------o-------+   y-faces j = 0 (bottom boundary)
+      |        v[0,0]          v[1,0]          v[2,0]
+      +--x---------------x---------------x---------------x--> x
+       u[0,j]          u[1,j]          u[2,j]          u[3,j]  (u[0,j], u[nx,j]: left and right boundary)
+
+    x: u on x-faces (the left face of cell i is u[i, j]);  o: v on y-faces (the bottom face
+    of cell j is v[i, j]);  p, rho, voidage at the centres.
 
     p, rho, voidage : (nx, ny)      cell (i, j) has centre ((i + 1/2) dx, (j + 1/2) dy)
     u               : (nx + 1, ny)  x-face (i, j) at (i dx, (j + 1/2) dy), between cells i-1 and i

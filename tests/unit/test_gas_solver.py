@@ -1,0 +1,209 @@
+"""GasSolver and GasProperties: input checks, initial states, operators and kernels against NumPy."""
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from fluidem.errors import CaseError
+from fluidem.gas import (GasConvergenceError, GasProperties, GasSolver, GasState, Inflow, PressureOutlet, Segment,
+                         StaggeredGrid, StepInfo, Wall, gas_step_benchmark)
+from fluidem.gas import _solver_kernels as K
+from fluidem.gas._operators import TVD, UPWIND, centre_to_x_faces, centre_to_y_faces, face_value
+from fluidem.gas.solver import GAS_CONSTANT
+
+GRID = StaggeredGrid(cells=(5, 4), size=(0.05, 0.08), depth=0.01)
+
+
+def box(props=None, **kw):
+    bcs = {"left": Wall(), "right": Wall(), "bottom": Inflow(superficial=0.5, voidage=0.4),
+           "top": PressureOutlet(pressure=101325.0)}
+    return GasSolver(GRID, props or GasProperties(), bcs, **kw)
+
+
+# ------------------------------------------------------------------ properties
+def test_ideal_gas_density_is_eq_44():
+    props = GasProperties()
+    assert props.ideal and props.compressibility == pytest.approx(28.8e-3 / (GAS_CONSTANT * 293.0))
+    assert props.density_at(101325.0) == pytest.approx(1.198, abs=1e-3)  # air at 293 K
+    const = GasProperties(density=1.2)
+    assert not const.ideal and const.compressibility == 0.0 and const.density_at(5e4) == 1.2
+
+
+@pytest.mark.parametrize("key, value", [("viscosity", -1.8e-5), ("molar_mass", 0.0), ("temperature", -10.0),
+                                        ("density", 0.0), ("reference_pressure", float("inf")),
+                                        ("viscosity", "thin")])
+def test_bad_gas_properties_are_case_errors(key, value):
+    with pytest.raises(CaseError, match=f"gas.{key} = "):
+        GasProperties(**{key: value})
+
+
+# ------------------------------------------------------------------ solver arguments
+@pytest.mark.parametrize("kw, message", [
+    ({"convection": "quick"}, "gas.convection = 'quick': allowed are"),
+    ({"gravity": (0.0, -9.81, 1.0)}, "gravity = "),
+    ({"gravity": (1.0,)}, "gravity = "),
+    ({"tolerance": 0.0}, "gas.tolerance"),
+    ({"max_iterations": 0}, "gas.max_iterations"),
+])
+def test_bad_solver_arguments_are_case_errors(kw, message):
+    with pytest.raises(CaseError, match=message):
+        box(**kw)
+
+
+def test_an_inflow_segment_off_its_side_is_a_case_error():
+    bcs = {"left": Wall(), "right": Wall(), "top": PressureOutlet(),
+           "bottom": Inflow(segments=[Segment(interstitial=1.0), Segment(interstitial=5.0, start=0.2, end=0.3)])}
+    with pytest.raises(CaseError, match=r"gas.boundaries.bottom: inflow segment 1 \(start = 0.2, end = 0.3\)"):
+        GasSolver(GRID, GasProperties(), bcs)
+
+
+def test_gravity_may_have_a_zero_third_component():
+    assert box(gravity=(0.0, -9.81, 0.0)).gravity == (0.0, -9.81)
+
+
+def test_initial_state_meets_the_boundary_conditions():
+    solver = box()
+    state = solver.initial_state(voidage=0.6, velocity=(0.3, 0.2))
+    assert isinstance(state, GasState)
+    assert state.p.shape == GRID.shape and state.u.shape == GRID.u_shape and state.v.shape == GRID.v_shape
+    assert np.all(state.u[[0, -1]] == 0.0)  # walls
+    np.testing.assert_allclose(state.v[:, 0], 0.5 / 0.4)  # interstitial inflow
+    assert np.all(state.v[:, 1:] == 0.2) and np.all(state.u[1:-1] == 0.3)
+    np.testing.assert_allclose(state.rho, state.p * GasProperties().compressibility)
+    assert state.p[0, 0] > state.p[0, -1]  # hydrostatic by default
+
+
+@pytest.mark.parametrize("kw, message", [
+    ({"voidage": np.ones((4, 5))}, r"gas voidage: shape \(4, 5\) does not match"),
+    ({"voidage": 1.2}, "gas voidage: value 1.2 outside"),
+    ({"beta": np.ones((3, 3))}, "gas beta: shape"),
+    ({"beta": -1.0}, "gas beta: must be finite and >= 0"),
+    ({"beta": (np.ones((6, 4)), np.ones((6, 4)))}, r"gas beta\[1\]: shape \(6, 4\) does not match \(5, 5\)"),
+    ({"beta": 1.0, "solids_u": np.ones((5, 5))}, "gas solids_u: shape"),
+    ({"source_v": np.ones((6, 4))}, "gas source_v: shape"),
+    ({"dt": 0.0}, "dt = 0.0: must be > 0"),
+])
+def test_bad_step_input_is_a_case_error(kw, message):
+    solver = box()
+    state = solver.initial_state()
+    kw = {"dt": 1e-4, **kw}
+    with pytest.raises(CaseError, match=message):
+        solver.advance(state, kw.pop("dt"), 0.0, **kw)
+
+
+def test_a_state_of_another_grid_is_a_case_error():
+    state = box().initial_state()
+    state.u = np.zeros((3, 3))
+    with pytest.raises(CaseError, match=r"gas state.u: shape \(3, 3\) does not match \(6, 4\)"):
+        box().advance(state, 1e-4)
+
+
+def test_a_step_far_beyond_the_stability_limit_raises():
+    solver = box(GasProperties(density=1.2))
+    state = solver.initial_state(velocity=(0.0, 1.0))
+    state.u[2, 1] = 1e300  # a wrecked field: the next step cannot be finite
+    with pytest.raises(GasConvergenceError, match="Courant number"):
+        solver.advance(state, 1e-3)
+
+
+def test_max_time_step_keeps_courant_and_viscous_numbers():
+    solver = box()
+    state = solver.initial_state(velocity=(2.0, 0.0))
+    dt = solver.max_time_step(state, courant=0.5)
+    assert dt == pytest.approx(min(0.5 / (2.0 / GRID.dx + 1.25 / GRID.dy),
+                                   0.5 / (1.8e-5 / state.rho.min() * (2 / GRID.dx**2 + 2 / GRID.dy**2))))
+
+
+# ------------------------------------------------------------------ Newton iterations
+def test_pressure_matrix_is_the_exact_jacobian_for_constant_density():
+    """With the matrix refactorised every step, the constant-density gas needs one correction."""
+    bcs = {"left": Wall(), "right": Wall(), "top": PressureOutlet(pressure=101325.0),
+           "bottom": Inflow(segments=[Segment(interstitial=4.5), Segment(interstitial=45.0, start=0.02, end=0.03)],
+                            voidage=0.4)}
+    solver = GasSolver(GRID, GasProperties(density=1.2), bcs, jacobian_reuse=0.0)
+    state = solver.initial_state(voidage=0.5)
+    rng = np.random.default_rng(0)
+    for k in range(10):
+        info = solver.advance(state, 1e-4, k * 1e-4, beta=rng.uniform(100, 1000, GRID.shape),
+                              voidage=rng.uniform(0.4, 0.6, GRID.shape))
+        assert info.iterations == 1 and info.converged
+
+
+def test_step_info_mass_balance_error():
+    info = StepInfo(iterations=1, mass_residual=0.0, converged=True, inflow_rate=2.0, outflow_rate=1.0, mass=1.0,
+                    mass_change_rate=0.5, courant=0.1)
+    assert info.mass_balance_error == pytest.approx(0.25)
+
+
+# ------------------------------------------------------------------ operators and kernels against NumPy
+def test_face_value_upwind_and_tvd():
+    # monotone data: upwind takes the donor, TVD adds the limited slope
+    assert face_value(1.0, 0.0, 1.0, 2.0, 3.0, UPWIND) == 1.0
+    assert face_value(-1.0, 0.0, 1.0, 2.0, 3.0, UPWIND) == 2.0
+    assert face_value(1.0, 0.0, 1.0, 2.0, 3.0, TVD) == pytest.approx(1.5)  # smooth: linear interpolation
+    assert face_value(-1.0, 0.0, 1.0, 2.0, 3.0, TVD) == pytest.approx(1.5)
+    # at an extremum the limiter falls back to the donor value
+    assert face_value(1.0, 0.0, 1.0, 0.0, 1.0, TVD) == 1.0
+
+
+def test_centre_to_face_interpolation():
+    rng = np.random.default_rng(4)
+    q = rng.normal(size=(4, 3))
+    ux, vy = np.empty((5, 3)), np.empty((4, 4))
+    centre_to_x_faces(q, False, ux)
+    centre_to_y_faces(q, True, vy)
+    np.testing.assert_allclose(ux[1:-1], 0.5 * (q[1:] + q[:-1]))
+    np.testing.assert_allclose(ux[[0, -1]], q[[0, -1]])
+    np.testing.assert_allclose(vy[:, 1:-1], 0.5 * (q[:, 1:] + q[:, :-1]))
+    np.testing.assert_allclose(vy[:, 0], 0.5 * (q[:, 0] + q[:, -1]))
+    np.testing.assert_allclose(vy[:, -1], vy[:, 0])
+
+
+def test_lu_solve_kernel_matches_scipy():
+    import scipy.sparse.linalg as spla
+
+    rng = np.random.default_rng(7)
+    n = 40
+    A = (sp.random(n, n, density=0.1, random_state=3) + 4.0 * sp.eye(n)).tocsc()
+    lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A")
+    L = sp.tril(lu.L, k=-1, format="csc")
+    U = lu.U.tocsc()
+    Us = sp.triu(U, k=1, format="csc")
+    lui = np.zeros((4, n + 1), np.int64)
+    lui[K.L_LP], lui[K.L_UP] = L.indptr, Us.indptr
+    lui[K.L_PERM_R, :n], lui[K.L_PERM_C, :n] = lu.perm_r, lu.perm_c
+    b = rng.normal(size=n)
+    x, w = np.empty(n), np.empty(n)
+    K.lu_solve(lui, L.indices.astype(np.int64), L.data, Us.indices.astype(np.int64), Us.data, U.diagonal(), b, x, w)
+    np.testing.assert_allclose(A @ x, b, atol=1e-12)
+
+
+def test_band_and_superlu_give_the_same_steps():
+    bcs = {"left": Wall(), "right": Wall(), "top": PressureOutlet(pressure=101325.0),
+           "bottom": Inflow(segments=[Segment(interstitial=4.5), Segment(interstitial=45.0, start=0.02, end=0.03)],
+                            voidage=0.4)}
+    states = []
+    for linear_solver in ("band", "superlu"):
+        solver = GasSolver(GRID, GasProperties(), bcs, linear_solver=linear_solver)
+        assert solver.linear_solver == linear_solver
+        state = solver.initial_state(voidage=0.5)
+        for k in range(20):
+            solver.advance(state, 1e-4, k * 1e-4, beta=300.0)
+        states.append(state)
+    np.testing.assert_allclose(states[0].v, states[1].v, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(states[0].p, states[1].p, rtol=1e-13)
+
+
+def test_band_solver_is_refused_with_periodic_sides_both_ways():
+    from fluidem.gas import Periodic
+
+    with pytest.raises(CaseError, match="gas.linear_solver = 'band'"):
+        GasSolver(GRID, GasProperties(), {s: Periodic() for s in ("left", "right", "bottom", "top")},
+                  linear_solver="band")
+
+
+def test_benchmark_rows():
+    rows = gas_step_benchmark(grids=((6, 10),), seconds=0.05)
+    assert [r["problem"].split(",")[2].strip().split()[0] for r in rows] == ["fixed", "moving"]
+    for row in rows:
+        assert row["grid"] == "6x10" and row["cells"] == 60 and row["steps"] >= 3 and row["ms_per_step"] > 0.0
+        assert {"problem", "iterations_per_step", "factorisations_per_step", "dt_s", "linear_solver"} <= set(row)

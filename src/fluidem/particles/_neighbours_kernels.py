@@ -82,6 +82,7 @@ def _bin(pos, lo, inv, ncell):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _scan_row(i, pos, radius, skin, cell, start, members, ncell, slab, out, write_from):
+    # out: int32 partner slots (empty array: count only)
     """Count (and, if out is not empty, write) the partners j owned by particle i."""
     c = cell[i]
     cz = c % ncell[2]
@@ -166,13 +167,13 @@ def build_pairs(pos, radius, skin, dim2):
     lo, inv, ncell = _cell_grid(pos, radius, skin, dim2)
     cell, start, members = _bin(pos, lo, inv, ncell)
     counts = np.zeros(n + 1, dtype=np.int64)
-    empty = np.empty(0, dtype=np.int64)
+    empty = np.empty(0, dtype=np.int32)
     for i in prange(n):
         counts[i + 1] = _scan_row(i, pos, radius, skin, cell, start, members, ncell, slab, empty, 0)
     for i in range(n):
         counts[i + 1] += counts[i]
     row_start = counts
-    partner = np.empty(row_start[n], dtype=np.int64)
+    partner = np.empty(row_start[n], dtype=np.int32)  # 4-byte partners: less memory traffic per step
     for i in prange(n):
         _scan_row(i, pos, radius, skin, cell, start, members, ncell, slab, partner, row_start[i])
     # sort each row so that lookups are deterministic and cache-friendly

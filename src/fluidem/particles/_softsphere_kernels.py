@@ -44,9 +44,10 @@ def _pair(i, j, p, pos, vel, omega, radius, mass, species, pp, hist, dt, update)
     r2 = rx * rx + ry * ry + rz * rz
     cut = radius[i] + radius[j]
     if r2 >= cut * cut:
-        hist[p, 0] = 0.0
-        hist[p, 1] = 0.0
-        hist[p, 2] = 0.0
+        if hist[p, 0] != 0.0 or hist[p, 1] != 0.0 or hist[p, 2] != 0.0:  # write only when needed (memory traffic)
+            hist[p, 0] = 0.0
+            hist[p, 1] = 0.0
+            hist[p, 2] = 0.0
         return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     r = math.sqrt(r2)
     inv_r = 1.0 / r

@@ -71,6 +71,20 @@ class PairContact(Strict):
         return {k: v for k, v in self.model_dump(exclude={"species"}).items() if v is not None}
 
 
+class WallPairContact(Strict):
+    """Override of particle–wall contact parameters for one species (optionally one wall)."""
+
+    species: str
+    wall: str | None = Field(None, description="wall name (a box's planes share it); default every wall")
+    restitution: float | None = Field(None, gt=0.0, le=1.0)
+    friction: float | None = Field(None, ge=0.0)
+    stiffness: float | None = Field(None, gt=0.0)
+    damping: float | None = Field(None, ge=0.0)
+
+    def changes(self) -> dict:
+        return {k: v for k, v in self.model_dump(exclude={"species", "wall"}).items() if v is not None}
+
+
 class Placement(Strict):
     """Initial positions: random non-overlapping fill, perturbed lattice (Hoomans 1996 §4.1) or a file."""
 
@@ -157,6 +171,7 @@ class Particles(Strict):
     contact: ContactLaw
     pairs: list[PairContact] = Field(default_factory=list, description="per species-pair overrides")
     wall_contact: ContactLaw | None = Field(None, description="particle–wall law; default: the particle law")
+    wall_pairs: list[WallPairContact] = Field(default_factory=list, description="per species(–wall) overrides")
     placement: Placement = Field(default_factory=Placement)
 
     @field_validator("species")
@@ -174,6 +189,9 @@ class Particles(Strict):
             for s in pc.species:
                 if s not in names:
                     raise ValueError(f"pairs: species {s!r} is not one of {sorted(names)}")
+        for wp in self.wall_pairs:
+            if wp.species not in names:
+                raise ValueError(f"wall_pairs: species {wp.species!r} is not one of {sorted(names)}")
         if self.wall_contact is not None and type(self.wall_contact) is not type(self.contact):
             raise ValueError("wall_contact must use the same model as contact")
         return self
@@ -220,6 +238,9 @@ class Case(Strict):
         names = [w.name for w in self.walls]
         if len(set(names)) != len(names):
             raise ValueError(f"wall names must be unique, got {names}")
+        for wp in self.particles.wall_pairs:
+            if wp.wall is not None and wp.wall not in names:
+                raise ValueError(f"particles.wall_pairs: wall {wp.wall!r} is not one of {names}")
         return self
 
     # ---------------------------------------------------------------- I/O

@@ -63,11 +63,16 @@ class SoftSphereEngine:
                 law = type(law).model_validate({**law.model_dump(), **pc.changes()})
         return law
 
-    def law_for_wall(self, plane):
+    def law_for_wall(self, plane, species: int):
+        """Particle–wall law: wall_contact (or contact), then the wall's overrides, then wall_pairs."""
         p = self.case.particles
         law = p.wall_contact if p.wall_contact is not None else p.contact
-        if plane.source.contact is not None:
-            law = type(law).model_validate({**law.model_dump(), **plane.source.contact.changes()})
+        changes = dict(plane.source.contact.changes()) if plane.source.contact is not None else {}
+        for wp in p.wall_pairs:
+            if wp.species == p.species[species].name and wp.wall in (None, plane.source.name):
+                changes.update(wp.changes())
+        if changes:
+            law = type(law).model_validate({**law.model_dump(), **changes})
         return law
 
     def _contact_tables(self):
@@ -90,7 +95,7 @@ class SoftSphereEngine:
                     r_eff = r_min[a] * r_min[b] / (r_min[a] + r_min[b])
                     times.append((law.contact_time(m_eff, r_eff, v, sp[a], sp[b]), f"species {sp[a].name}–{sp[b].name}"))
             for w, plane in enumerate(self.walls.planes):
-                law = self.law_for_wall(plane)
+                law = self.law_for_wall(plane, a)
                 pw[a, w] = law.pack(sp[a], plane.source)
                 if np.isfinite(m_min[a]):
                     times.append((law.contact_time(m_min[a], r_min[a], v, sp[a], plane.source),

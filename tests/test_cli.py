@@ -508,3 +508,37 @@ def test_cases_in_a_real_process(tmp_path):
     assert res.returncode == 0, res.stderr
     assert any(line.startswith("pour ") for line in res.stdout.splitlines())
     assert res.stderr == ""
+
+
+def test_write_failure_keeps_the_checkpoint_resumable(tmp_path, capsys, monkeypatch):
+    """A failing output write (as on a full disk) stops the run cleanly; the checkpoint stays usable."""
+    from fluidem.io import snapshots
+
+    out_dir = tmp_path / "run"
+    rc, _, err = cli(["run", "pour", "--until", "0.01", "--out", out_dir, "--threads", "1", "--quiet"], capsys)
+    assert rc == 0, err
+    calls = {"n": 0}
+    real_call = snapshots.ParticleWriter.__call__
+
+    def full_disk(self, sim):
+        calls["n"] += 1
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(snapshots.ParticleWriter, "__call__", full_disk)
+    rc, out, err = cli(["run", "--resume", out_dir, "--until", "0.05", "--quiet"], capsys)
+    assert rc == 1 and calls["n"] == 1
+    assert "No space left on device" in err and "--resume" in err and "Traceback" not in err
+    monkeypatch.setattr(snapshots.ParticleWriter, "__call__", real_call)
+    rc, _, err = cli(["run", "--resume", out_dir, "--until", "0.03", "--quiet"], capsys)
+    assert rc == 0, err
+    # the failed snapshot was rewritten on resume: same snapshot times as an uninterrupted run
+    ref = tmp_path / "ref"
+    rc, _, err = cli(["run", "pour", "--until", "0.03", "--out", ref, "--threads", "1", "--quiet"], capsys)
+    assert rc == 0, err
+    import h5py
+
+    def times(d):
+        with h5py.File(d / "particles.h5") as f:
+            return [float(f["snapshots"][k].attrs["time"]) for k in sorted(f["snapshots"])]
+
+    assert times(out_dir) == times(ref)

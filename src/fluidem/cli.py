@@ -66,6 +66,10 @@ def cmd_run(args) -> int:
     except FloatingPointError as err:
         print(f"fluidem: run failed: {err}", file=sys.stderr)
         return 1
+    except OSError as err:
+        print(f"fluidem: run stopped at t = {sim.time:.6g} s: {err}. The last checkpoint in {out} is intact; "
+              f"free the space or fix the folder, then: fluidem run --resume {out}", file=sys.stderr)
+        return 1
     print(json.dumps(summary, indent=2))
     return 0
 

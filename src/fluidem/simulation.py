@@ -214,6 +214,16 @@ class Simulation:
             self.status = f"error: {err}"
             self._finish(interrupted=True)
             raise
+        except OSError as err:
+            # e.g. a full disk while writing output: the last checkpoint was replaced atomically, so it is
+            # intact; try to record the state, but never hide the original error
+            self.status = f"error: {err}"
+            try:
+                # keep the last good checkpoint: resuming from it rewrites the outputs that failed
+                self._finish(interrupted=True, checkpoint=False)
+            except OSError:
+                pass
+            raise
         finally:
             self._restore_signal_handlers(handlers)
         self.wall_time = wall0 + _time.perf_counter() - self._run_wall_start
@@ -251,8 +261,8 @@ class Simulation:
             raise FloatingPointError(f"particle positions became non-finite at t = {self.time:.6g} s "
                                      f"(time step too large or contact parameters too stiff?)")
 
-    def _finish(self, interrupted: bool = False) -> dict:
-        if self.out_dir is not None and "checkpoint" in self.observers:
+    def _finish(self, interrupted: bool = False, checkpoint: bool = True) -> dict:
+        if checkpoint and self.out_dir is not None and "checkpoint" in self.observers:
             self.save_checkpoint(self.out_dir / RESTART_NAME)
         for obs in self.observers.values():
             if hasattr(obs, "finalize"):

@@ -17,6 +17,11 @@ tiny_bed_case(...)                 case of a small 3D bed dropped from a lattice
 """
 from __future__ import annotations
 
+import contextlib
+import io
+import shutil
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -192,3 +197,23 @@ def tiny_bed_case(tmp_path):
         return validate_case(data)
 
     return _make
+
+
+@pytest.fixture(scope="session")
+def pour_run(tmp_path_factory) -> Path:
+    """A 0.05 s run of the built-in pour case, made once per session (plotting and report tests share it)."""
+    out = tmp_path_factory.getbasetemp() / "pour-0.05s"
+    if not (out / "summary.json").exists():
+        import numba
+
+        from fluidem.cli import main
+
+        if out.exists():
+            shutil.rmtree(out)
+        threads = numba.get_num_threads()
+        try:
+            with contextlib.redirect_stdout(io.StringIO()):  # the run prints its summary
+                assert main(["run", "pour", "--until", "0.05", "--out", str(out), "--quiet"]) == 0
+        finally:
+            numba.set_num_threads(threads)  # a run picks its own thread count; later tests get theirs back
+    return out

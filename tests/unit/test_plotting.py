@@ -30,28 +30,6 @@ ALL_FIGURES = {"snapshots_height", "energy", "contacts", "bed_height"}  # what a
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 
-def make_pour_run(tmp_path_factory) -> Path:
-    """A 0.05 s pour run in the session's base temp folder, made once and shared with tests/test_report.py."""
-    out = tmp_path_factory.getbasetemp() / "pour-0.05s"
-    if not (out / "summary.json").exists():
-        import numba
-
-        from fluidem.cli import main
-
-        if out.exists():
-            shutil.rmtree(out)
-        threads = numba.get_num_threads()
-        try:
-            with contextlib.redirect_stdout(io.StringIO()):  # the run prints its summary
-                assert main(["run", "pour", "--until", "0.05", "--out", str(out), "--quiet"]) == 0
-        finally:
-            numba.set_num_threads(threads)  # a run picks its own thread count; later tests get theirs back
-    return out
-
-
-@pytest.fixture(scope="session")
-def pour_run(tmp_path_factory) -> Path:
-    return make_pour_run(tmp_path_factory)
 
 
 @pytest.fixture

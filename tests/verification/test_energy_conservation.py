@@ -9,7 +9,6 @@ The elastic energy is computed here independently of the engine, by brute force.
 """
 from __future__ import annotations
 
-import math
 
 import numpy as np
 import pytest

@@ -114,18 +114,20 @@ def test_hoomans_gives_ergun_pressure_gradient_at_0_4():
         assert grad == pytest.approx(ergun, rel=1e-13)
 
 
-@pytest.mark.parametrize("law, wen_yu_exponent, ergun_side_at_switch",
-                         [(Hoomans1996(), 2.65, False), (Gidaspow(), 2.7, True)])
-def test_switch_at_0_8_has_the_known_jump(law, wen_yu_exponent, ergun_side_at_switch):
+@pytest.mark.parametrize("law, wen_yu_exponent, ergun_side_at_switch, ref",
+                         [(Hoomans1996(), 2.65, False, ref_hoomans), (Gidaspow(), 2.7, True, ref_gidaspow)])
+def test_switch_at_0_8_has_the_known_jump(law, wen_yu_exponent, ergun_side_at_switch, ref):
     """Both branches are continuous up to ε = 0.8 and meet there with a jump. At Re → 0 the ratio
     Ergun/Wen–Yu is (150·0.2/0.8)/(18·0.8^−n) = 1.153 (n = 2.65, Hoomans) or 1.140 (n = 2.7, Sun),
-    i.e. β drops by 13-14 % across the switch; asserted to 1e-9 with Re = 1e-6."""
+    i.e. β drops by 13-14 % across the switch. At Re = 1e-6 the ratio equals the formula's to 1e-12
+    and the Re → 0 constant to 1e-4 (Wen–Yu's 0.15 Re^0.687 = 1.1e-5 is left)."""
     slip = 1e-6 * MU / (0.8 * RHO * D)
     below = law.beta(0.8 - 1e-12, slip, D, RHO, MU)
     above = law.beta(0.8 + 1e-12, slip, D, RHO, MU)
     at = law.beta(0.8, slip, D, RHO, MU)
     expected = (150 * 0.2 / 0.8) / (18 * 0.8**-wen_yu_exponent)
-    assert below / above == pytest.approx(expected, rel=1e-9)
+    assert below / above == pytest.approx(ref(0.8 - 1e-12, slip) / ref(0.8 + 1e-12, slip), rel=1e-12)
+    assert below / above == pytest.approx(expected, rel=1e-4)
     assert expected == pytest.approx(1.153 if wen_yu_exponent == 2.65 else 1.140, abs=1e-3)
     assert at == pytest.approx(below if ergun_side_at_switch else above, rel=1e-9)
 
@@ -157,14 +159,30 @@ def test_beetstra_polydisperse_y_squared(y):
 
 @pytest.mark.parametrize("name", drag_laws.names())
 def test_positive_and_increasing_in_slip(name):
-    """β > 0 for 0.36 ≤ ε < 1 and β non-decreasing in slip speed (Re 1e-3..1e4, 120 points a decade apart
-    by 1.15: coarser than gidaspow's 1.6 % step at Re = 1000, tested above)."""
+    """β > 0 for 0.36 ≤ ε < 1; the drag force β V_p/(1−ε)·|u−v| strictly increases with slip speed, and
+    β itself does not decrease (Re 1e-3..1e4 on 120 points, steps of ×1.15: coarser than gidaspow's
+    1.6 % drop at Re = 1000, tested above), except di_felice below ε ≈ 0.44 (next test)."""
     law = drag_laws.get(name)()
     re = np.logspace(-3, 4, 120)
     for eps in (0.36, 0.5, 0.7, 0.8, 0.85, 0.95, 0.999):
-        beta = law.beta(eps, re * MU / (eps * RHO * D), D, RHO, MU)
+        slip = re * MU / (eps * RHO * D)
+        beta = law.beta(eps, slip, D, RHO, MU)
         assert np.all(beta > 0.0)
-        assert np.all(np.diff(beta) >= 0.0)
+        assert np.all(np.diff(law.force_coefficient(eps, slip, D, RHO, MU) * slip) > 0.0)
+        if not (name == "di_felice" and eps < 0.44):
+            assert np.all(np.diff(beta) >= 0.0)
+
+
+def test_di_felice_beta_dips_with_slip_in_dense_beds():
+    """A property of the published law, not a bug: for ε ≲ 0.44 and 0.1 ≲ Re ≲ 4 the exponent χ(Re) falls
+    faster than C_D|u−v| rises, so β falls slightly with slip (by at most 0.03 % per ×1.15 step at
+    ε = 0.36); the force still rises. Pinned here so a change of form is noticed."""
+    law = DiFelice()
+    re = np.logspace(-3, 4, 120)
+    slip = re * MU / (0.36 * RHO * D)
+    d = np.diff(law.beta(0.36, slip, D, RHO, MU))
+    assert np.any(d < 0.0)
+    assert np.all((re[1:][d < 0] > 0.1) & (re[1:][d < 0] < 4.0))
 
 
 def test_particle_force_is_along_the_slip():

@@ -421,6 +421,8 @@ def run_one(code: str, bed: dict, steps: int, ranks: int, warmup: int = 100,
             others = max(((b1 - b0) - (c1 - c0)) / wall, 0.0) if wall > 0 else 0.0
             runs.append((float(loops[-1][0]), loops[-1], out, wall, others))
     except FileNotFoundError as exc:
+        if keep_dir is None:
+            shutil.rmtree(tmp, ignore_errors=True)
         row["error"] = str(exc)
         return row
     except subprocess.TimeoutExpired:
@@ -511,7 +513,8 @@ def settle_with_lammps(out_path, n: int, box: float, d: float = 0.004, ranks: in
     deck = LAMMPS_SETTLE_DECK.substitute(vals)
     if verbose:
         print(f"[settle] {n} spheres d={d} in {box}x{box} m, lattice top {h0:.4f} m, "
-              f"fall {n_fall} steps + quench, {ranks} rank(s), work dir {tmp}", file=sys.stderr)
+              f"fall {n_fall} steps + quench, {ranks} rank(s)"
+              + (f", files in {tmp}" if keep_dir is not None else ""), file=sys.stderr)
     t0 = time.perf_counter()
     rc, out, cmd = run_deck("lammps", deck, tmp, ranks, timeout)
     if rc != 0 or not (tmp / "settled.dump").exists():

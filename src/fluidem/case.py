@@ -14,7 +14,9 @@ from typing import Annotated, Any, Literal, Union
 import tomli_w
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
+from .coupling.schema import CouplingSection
 from .errors import CaseError
+from .gas.schema import GasSection
 from .particles.contact import HertzMindlin, LinearSpringDashpot
 
 Vec3 = tuple[float, float, float]
@@ -227,6 +229,8 @@ class Case(Strict):
     neighbours: Neighbours = Field(default_factory=Neighbours)
     output: Output = Field(default_factory=Output)
     threads: int | None = Field(None, ge=1, description="compute threads; default all cores (one below 4000 particles)")
+    gas: GasSection | None = Field(None, description="gas phase; omit for a DEM-only run")
+    coupling: CouplingSection | None = Field(None, description="gas–particle exchange; default with [gas]")
 
     @model_validator(mode="after")
     def _defaults(self):
@@ -241,6 +245,14 @@ class Case(Strict):
         for wp in self.particles.wall_pairs:
             if wp.wall is not None and wp.wall not in names:
                 raise ValueError(f"particles.wall_pairs: wall {wp.wall!r} is not one of {names}")
+        if self.gas is None and self.coupling is not None:
+            raise ValueError("[coupling] needs a [gas] section")
+        if self.gas is not None:
+            if self.gravity[2] != 0.0:
+                raise ValueError(f"gravity = {list(self.gravity)}: the 2D gas grid (x-y) needs gravity in the x-y "
+                                 "plane (z = 0); set gravity = [0.0, -9.81, 0.0]")
+            if self.coupling is None:
+                object.__setattr__(self, "coupling", CouplingSection())
         return self
 
     # ---------------------------------------------------------------- I/O

@@ -99,6 +99,11 @@ class Simulation:
         else:
             self.engine = SoftSphereEngine(case)
             self.engine.check_initial_overlaps()
+        self.gas = None
+        if case.gas is not None:  # two-way coupled run: gas steps of DT, DEM sub-steps within
+            from .coupling.exchange import GasCoupling
+
+            self.gas = GasCoupling(case, self.engine)
         self.observers: dict = {}
         self.progress = Progress(case.output.progress_interval) if progress else None
         self.status = "created"
@@ -164,7 +169,10 @@ class Simulation:
     # ------------------------------------------------------------ stepping
     def step_once(self, nsteps: int = 1) -> None:
         """Advance ``nsteps`` DEM steps (no observers)."""
-        self.engine.advance(nsteps)
+        if self.gas is not None:
+            self.gas.advance(nsteps)
+        else:
+            self.engine.advance(nsteps)
         self.particle_steps += nsteps * self.engine.state.n
 
     def run(self, until: float | None = None) -> dict:
@@ -297,6 +305,8 @@ class Simulation:
         }
         if self.case.particles.dimensions == 2:
             out["packing_fraction"] = P.surface_packing_fraction(eng)
+        if self.gas is not None:
+            out.update(gas_dt_s=self.gas.gas_dt, gas_steps=self.gas.gas_steps, dem_substeps=self.gas.substeps)
         out.update(self._summary_extra)
         return out
 
@@ -313,7 +323,11 @@ class Simulation:
     # ------------------------------------------------------------ checkpoints
     def save_checkpoint(self, path: Path) -> None:
         scalars = dict(self.engine.checkpoint_scalars(), wall_time=self.wall_time, particle_steps=self.particle_steps)
-        save_restart(path, self.engine.checkpoint_arrays(), scalars, self.case.to_toml())
+        arrays = self.engine.checkpoint_arrays()
+        if self.gas is not None:
+            arrays = {**arrays, **self.gas.checkpoint_arrays()}
+            scalars.update(self.gas.checkpoint_scalars())
+        save_restart(path, arrays, scalars, self.case.to_toml())
 
     def load_checkpoint(self, path: Path) -> None:
         arrays, scalars, _ = load_restart(path)
@@ -321,6 +335,8 @@ class Simulation:
 
     def _restore(self, arrays, scalars) -> None:
         self.engine.restore(arrays, scalars)
+        if self.gas is not None:
+            self.gas.restore(arrays, scalars)
         self.wall_time = float(scalars.get("wall_time", 0.0))
         self.particle_steps = int(scalars.get("particle_steps", 0))
 

@@ -1,0 +1,159 @@
+"""The ``[gas]`` section of a case: grid, properties, named boundary sides, initial velocity, time step DT.
+
+Every boundary side names its condition by ``kind`` from the ``boundary_conditions``
+registry (``gas/boundaries.py``); the keys a kind accepts are listed in ``KIND_KEYS``.
+``GasSection.build(gravity)`` gives the ``GasSolver``; the section is validated by
+building its parts once, so a case that loads also builds.
+
+Example (TOML)::
+
+    [gas]
+    dt = 1e-4                      # gas time step DT [s]; the DEM dt divides it
+    [gas.grid]
+    cells = [15, 25]
+    size = [0.15, 0.5]             # [m], lower-left corner at the origin
+    depth = 0.004                  # [m]
+    [gas.properties]
+    density = 1.2                  # omit for the ideal gas of Hoomans 1996 eq. 44
+    [gas.boundaries.left]
+    kind = "wall"
+    [gas.boundaries.bottom]
+    kind = "inflow"
+    voidage = 0.4
+    segments = [{superficial = 1.8}, {interstitial = 45.0, start = 0.07, end = 0.08}]
+"""
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+from ..errors import CaseError
+from .boundaries import Inflow, PressureOutlet, Segment, boundary_conditions
+from .grid import SIDES, StaggeredGrid
+from .solver import GasProperties, GasSolver
+
+# keys each boundary kind accepts besides ``kind``
+KIND_KEYS = {"inflow": ("segments", "voidage", "superficial", "interstitial"), "pressure_outlet": ("pressure",)}
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", validate_assignment=True)
+
+
+class GridSpec(_Strict):
+    """Uniform 2D staggered grid (``StaggeredGrid``)."""
+
+    cells: tuple[int, int] = Field(description="number of cells (nx, ny)")
+    size: tuple[float, float] = Field(description="domain width and height (Lx, Ly) [m]; lower-left corner at 0")
+    depth: float = Field(gt=0.0, description="extent along z of the 2D grid [m]")
+
+    @model_validator(mode="after")
+    def _check(self):
+        self.build()
+        return self
+
+    def build(self) -> StaggeredGrid:
+        try:
+            return StaggeredGrid(cells=self.cells, size=self.size, depth=self.depth)
+        except CaseError as err:
+            raise ValueError(str(err)) from None
+
+
+class PropertiesSpec(_Strict):
+    """Gas properties (``GasProperties``): air at 293 K by default."""
+
+    viscosity: float = Field(1.8e-5, ge=0.0, description="shear viscosity [Pa s]")
+    molar_mass: float = Field(28.8e-3, gt=0.0, description="[kg/mol] of the ideal gas")
+    temperature: float = Field(293.0, gt=0.0, description="[K]")
+    density: float | None = Field(None, gt=0.0, description="constant density [kg/m^3]; omit for the ideal gas")
+    reference_pressure: float = Field(101325.0, gt=0.0, description="[Pa]")
+
+    def build(self) -> GasProperties:
+        return GasProperties(**self.model_dump())
+
+
+class SegmentSpec(_Strict):
+    """One stretch of an inflow side (``Segment``): exactly one of interstitial / superficial [m/s]."""
+
+    interstitial: float | None = None
+    superficial: float | None = None
+    start: float | None = Field(None, description="[m] along the side (x on bottom/top, y on left/right)")
+    end: float | None = None
+
+
+class BoundarySpec(_Strict):
+    """A condition on one side, chosen by ``kind`` from the gas boundary-condition registry."""
+
+    kind: str
+    segments: list[SegmentSpec] | None = None
+    voidage: float | None = Field(None, description="inflow: voidage of the influx cells [-]")
+    superficial: float | None = Field(None, description="inflow: superficial velocity over the whole side [m/s]")
+    interstitial: float | None = Field(None, description="inflow: interstitial velocity over the whole side [m/s]")
+    pressure: float | None = Field(None, description="pressure_outlet: pressure [Pa]; default reference_pressure")
+
+    @field_validator("kind")
+    @classmethod
+    def _known(cls, v):
+        if v not in boundary_conditions:
+            raise ValueError(f"unknown gas boundary kind {v!r}; allowed: {', '.join(boundary_conditions.names())}")
+        return v
+
+    @model_validator(mode="after")
+    def _check(self):
+        allowed = KIND_KEYS.get(self.kind, ())
+        given = [k for k in ("segments", "voidage", "superficial", "interstitial", "pressure")
+                 if getattr(self, k) is not None]
+        extra = [k for k in given if k not in allowed]
+        if extra:
+            what = f"allowed: {', '.join(allowed)}" if allowed else "it takes no other keys"
+            raise ValueError(f"kind {self.kind!r} does not take {', '.join(extra)}; {what}")
+        self.build()
+        return self
+
+    def build(self):
+        cls = boundary_conditions.get(self.kind)
+        try:
+            if cls is Inflow:
+                kw = {k: getattr(self, k) for k in ("voidage", "superficial", "interstitial")
+                      if getattr(self, k) is not None}
+                segs = tuple(Segment(**s.model_dump()) for s in (self.segments or []))
+                return Inflow(segments=segs, **kw)
+            if cls is PressureOutlet:
+                return PressureOutlet(pressure=self.pressure)
+            return cls()
+        except CaseError as err:
+            raise ValueError(str(err)) from None
+
+
+class GasSection(_Strict):
+    """The gas phase of a coupled run (Hoomans 1996 eqs 42-48 on a staggered grid)."""
+
+    dt: float = Field(gt=0.0, description="gas time step DT [s]; the DEM dt is DT / ceil(DT / dt_DEM)")
+    grid: GridSpec
+    properties: PropertiesSpec = Field(default_factory=PropertiesSpec)
+    boundaries: dict[str, BoundarySpec] = Field(description="a condition on each of left, right, bottom, top")
+    initial_velocity: tuple[float, float] = Field((0.0, 0.0), description="interstitial gas velocity at t = 0 [m/s]")
+    convection: Literal["upwind", "tvd"] = "upwind"
+    tolerance: float = Field(1e-10, gt=0.0, lt=1.0, description="mass-residual tolerance of each gas step [-]")
+
+    @field_validator("boundaries")
+    @classmethod
+    def _sides(cls, v):
+        unknown = sorted(set(v) - set(SIDES))
+        if unknown:
+            raise ValueError(f"unknown side(s) {', '.join(map(repr, unknown))}; allowed: {', '.join(SIDES)}")
+        missing = [s for s in SIDES if s not in v]
+        if missing:
+            raise ValueError(f"missing side(s) {', '.join(missing)}: give a kind for each of {', '.join(SIDES)}")
+        periodic = {s for s, b in v.items() if b.kind == "periodic"}
+        for a, b in (("left", "right"), ("bottom", "top")):
+            if (a in periodic) != (b in periodic):
+                raise ValueError(f"sides {a} and {b}: periodic needs both opposite sides periodic")
+        return v
+
+    def build(self, gravity) -> GasSolver:
+        """The ``GasSolver`` of this section under ``gravity`` (gx, gy[, 0]) [m/s^2]."""
+        return GasSolver(self.grid.build(), self.properties.build(),
+                         {side: b.build() for side, b in self.boundaries.items()},
+                         gravity=tuple(gravity)[:2], convection=self.convection, tolerance=self.tolerance)

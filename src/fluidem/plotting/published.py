@@ -55,16 +55,15 @@ PUBLISHED: dict[str, tuple[PublishedValue, ...]] = {
             summary_key="energy_error_rel", scale=100.0, unit="%", digits=2,
             when_missing="n/a for soft spheres (contacts dissipate by design)"),
     ),
-    # Sun et al. 2007 (soft spheres, 2D). The keys are the names these cases are expected
-    # to get when they are added as built-ins; rename the key if the case lands under another.
+    # Sun et al. 2007 (soft spheres, 2D): the built-in cases tsuji-jet and goldschmidt.
     # Sun's numbers are averages over 5-10 s: give them a summary_key once the run reports
     # such an average (the final instantaneous value is not comparable).
-    "sun2007_jet": (
+    "tsuji-jet": (
         PublishedValue("bulk coordination number", "about 1.2", "Sun et al. 2007, central jet, 5–10 s"),
         PublishedValue("multicontact ratio", "above 0.6 most of the time", "Sun et al. 2007, central jet"),
         PublishedValue("largest contact force / drag", "up to 100", "Sun et al. 2007, corners beside the jet"),
     ),
-    "sun2007_uniform": (
+    "goldschmidt": (
         PublishedValue("mean particle height, 5–10 s", "8.9 cm (TF-DEM, cell-averaged drag)",
                        "Sun et al. 2007, uniform inflow",
                        others=("9.1 cm (per-particle drag)", "9.16 cm (two-fluid model)", "11.4 cm (experiment)")),

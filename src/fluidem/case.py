@@ -314,7 +314,7 @@ def _allowed_keys(loc: tuple) -> list[str] | None:
             return None
         if part in fields:
             ann = fields[part].annotation
-            model = _model_of(ann, None)
+            model = _model_of(ann)
         else:
             from .particles.contact import contact_models
 
@@ -328,13 +328,13 @@ def _allowed_keys(loc: tuple) -> list[str] | None:
     return sorted(fields) if fields else None
 
 
-def _model_of(ann, _):
+def _model_of(ann):
     import typing
 
     if isinstance(ann, type) and issubclass(ann, BaseModel):
         return ann
     for arg in typing.get_args(ann):
-        m = _model_of(arg, None)
+        m = _model_of(arg)
         if m is not None:
             return m
     return None

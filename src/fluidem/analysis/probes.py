@@ -33,13 +33,8 @@ def contacts(engine) -> dict[str, float]:
 
 
 def wall_positions(engine):
-    from ..particles._softsphere_kernels import wall_state
-
-    point = np.empty_like(engine.wall_point0)
-    for w in range(point.shape[0]):
-        px, py, pz, *_ = wall_state(engine.wall_motion, engine.wall_point0, w, engine.time)
-        point[w] = (px, py, pz)
-    return point, engine.wall_normal
+    """(reference points (W, 3), normals (W, 3)) of the wall planes at the engine's time."""
+    return walls_now(engine.wall_motion, engine.wall_point0, engine.time)[:, :3], engine.wall_normal
 
 
 @njit(cache=True, error_model="numpy")

@@ -66,18 +66,25 @@ def _bin(pos, lo, inv, ncell):
                 k = 0
             c = c * ncell[d] + k
         cell[i] = c
-    ntot = ncell[0] * ncell[1] * ncell[2]
-    start = np.zeros(ntot + 1, dtype=np.int64)
+    start, members = _counting_sort(cell, ncell[0] * ncell[1] * ncell[2])
+    return cell, start, members
+
+
+@njit(cache=True, error_model="numpy")
+def _counting_sort(key, nkeys):
+    """CSR of the indices grouped by key: (start (nkeys+1,), members (N,)), stable within a key."""
+    n = key.shape[0]
+    start = np.zeros(nkeys + 1, dtype=np.int64)
     for i in range(n):
-        start[cell[i] + 1] += 1
-    for c in range(ntot):
+        start[key[i] + 1] += 1
+    for c in range(nkeys):
         start[c + 1] += start[c]
     fill = start[:-1].copy()
     members = np.empty(n, dtype=np.int64)
     for i in range(n):
-        members[fill[cell[i]]] = i
-        fill[cell[i]] += 1
-    return cell, start, members
+        members[fill[key[i]]] = i
+        fill[key[i]] += 1
+    return start, members
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -141,18 +148,9 @@ def _slabs(pos, radius, skin, dim2, max_slabs):
     nslab = max(1, min(max_slabs, int(best / cut))) if n > 0 else 1
     width = best / nslab if best > 0 else 1.0
     slab = np.empty(n, dtype=np.int64)
-    start = np.zeros(nslab + 1, dtype=np.int64)
     for i in range(n):
-        k = min(nslab - 1, int((pos[i, axis] - lo) / width))
-        slab[i] = k
-        start[k + 1] += 1
-    for k in range(nslab):
-        start[k + 1] += start[k]
-    fill = start[:-1].copy()
-    members = np.empty(n, dtype=np.int64)
-    for i in range(n):
-        members[fill[slab[i]]] = i
-        fill[slab[i]] += 1
+        slab[i] = min(nslab - 1, int((pos[i, axis] - lo) / width))
+    start, members = _counting_sort(slab, nslab)
     return slab, start, members
 
 

@@ -39,6 +39,7 @@ DENSITY = 2500.0  # [kg/m^3]
 LAW_DEFAULTS: dict[str, dict] = {
     "linear_spring_dashpot": {"stiffness": 1.0e4},
     "hertz_mindlin": {"youngs_modulus": 1.0e8, "poisson_ratio": 0.3},
+    "hard_sphere": {},
 }
 
 

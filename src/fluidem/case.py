@@ -17,7 +17,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 from .coupling.schema import CouplingSection
 from .errors import CaseError
 from .gas.schema import GasSection
-from .particles.contact import HertzMindlin, LinearSpringDashpot
+from .particles.contact import HardSphere, HertzMindlin, LinearSpringDashpot
 
 Vec3 = tuple[float, float, float]
 
@@ -26,7 +26,7 @@ class Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", validate_assignment=True)
 
 
-ContactLaw = Annotated[Union[LinearSpringDashpot, HertzMindlin], Field(discriminator="model")]
+ContactLaw = Annotated[Union[LinearSpringDashpot, HertzMindlin, HardSphere], Field(discriminator="model")]
 
 
 class SizeDistribution(Strict):

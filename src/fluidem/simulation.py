@@ -22,7 +22,7 @@ from .io.atomic import write_text_atomic
 from .io.probes_csv import ProbeWriter
 from .io.restart import RESTART_NAME, load_restart, save_restart
 from .io.snapshots import ParticleWriter
-from .particles.softsphere import SoftSphereEngine
+from .particles import engine_for
 from .schedule import EveryTime
 from .state import ParticleState
 
@@ -95,9 +95,9 @@ class Simulation:
                 raise CaseError(f"--resume {self.out_dir}: no {RESTART_NAME} there")
             restart = load_restart(self.out_dir / RESTART_NAME)
             state = ParticleState(**{k[len("state/"):]: v.copy() for k, v in restart[0].items() if k.startswith("state/")})
-            self.engine = SoftSphereEngine(case, state=state)  # the restart file holds every particle
+            self.engine = engine_for(case, state=state)  # the restart file holds every particle
         else:
-            self.engine = SoftSphereEngine(case)
+            self.engine = engine_for(case)
             self.engine.check_initial_overlaps()
         self.gas = None
         if case.gas is not None:  # two-way coupled run: gas steps of DT, DEM sub-steps within

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fluidem.particles.contact import contact_models
+from fluidem.particles.contact import soft_contact_models
 
 DIAMETERS = (4e-3, 3e-3)  # [m] unequal, so that m_eff, R* and lever arms differ between the bodies
 # relative sliding (y, z) plus approach (x), and spins about every axis
@@ -18,7 +18,7 @@ VELOCITY = np.array([[0.3, 0.2, -0.1], [-0.2, -0.3, 0.25]])  # [m/s]
 OMEGA = np.array([[40.0, -25.0, 60.0], [-30.0, 55.0, 20.0]])  # [rad/s]
 
 
-@pytest.mark.parametrize("model", contact_models.names())
+@pytest.mark.parametrize("model", soft_contact_models())
 def test_pair_forces_are_equal_and_opposite(two_particles, model):
     # e < 1 so that the tangential dashpot acts at once (the tangential spring starts unstretched)
     eng = two_particles(overlap=0.01 * DIAMETERS[1], model=model, diameters=DIAMETERS, vel=VELOCITY,
@@ -41,7 +41,7 @@ def test_pair_forces_are_equal_and_opposite(two_particles, model):
     assert t[0] @ t[1] > 0.0
 
 
-@pytest.mark.parametrize("model", contact_models.names())
+@pytest.mark.parametrize("model", soft_contact_models())
 @pytest.mark.parametrize("gap", [0.0, 1e-9, 1e-4], ids=["touching", "1nm", "0.1mm"])
 def test_no_force_without_overlap(two_particles, model, gap):
     """At zero overlap the force is exactly zero — the dashpot must not act on approaching bodies."""
@@ -50,7 +50,7 @@ def test_no_force_without_overlap(two_particles, model, gap):
     assert np.all(eng.state.force == 0.0) and np.all(eng.state.torque == 0.0)
 
 
-@pytest.mark.parametrize("model", contact_models.names())
+@pytest.mark.parametrize("model", soft_contact_models())
 def test_elastic_force_vanishes_continuously(two_particles, model):
     """Bodies at rest: F(δ) → 0 as δ → 0 (no jump at first touch).
 

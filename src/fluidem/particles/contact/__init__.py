@@ -8,5 +8,12 @@ for the slots). The kernels dispatch on the integer code in slot 0
 from .base import ContactModel, contact_models
 from .spring_dashpot import LinearSpringDashpot
 from .hertz_mindlin import HertzMindlin
+from .hard_sphere import HardSphere
 
-__all__ = ["ContactModel", "contact_models", "LinearSpringDashpot", "HertzMindlin"]
+__all__ = ["ContactModel", "contact_models", "soft_contact_models", "LinearSpringDashpot", "HertzMindlin",
+           "HardSphere"]
+
+
+def soft_contact_models() -> list[str]:
+    """Names of the registered soft-sphere (force-based) contact laws."""
+    return [n for n in contact_models.names() if not contact_models.get(n).instantaneous]

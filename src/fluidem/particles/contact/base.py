@@ -41,6 +41,7 @@ class ContactModel(BaseModel):
     friction: float = Field(0.3, ge=0.0, description="Coulomb friction coefficient mu [-]")
 
     code: ClassVar[int] = 0
+    instantaneous: ClassVar[bool] = False  # True: hard-sphere collisions, handled by the event-driven engine
 
     def pack(self, body_i: "Material", body_j: "Material | None") -> np.ndarray:
         """Parameter row for a contact of body i with body j (j=None: a rigid wall of i's material)."""

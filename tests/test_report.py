@@ -138,8 +138,11 @@ def test_report_is_one_self_contained_page(report, pour_run):
     assert packing[1].startswith(f"{summary['packing_fraction']:.3g} (outside the published range)")
     assert cells["energy conservation error"][1].startswith("n/a for soft spheres")
     assert "This run stopped at t = 0.05" in html.unescape(text)
-    assert stderr.strip() == ("fluidem report: skipped pressure: probes.csv has no pressure columns (*_Pa); "
-                              "runs with a gas solver write them")
+    no_gas = "the run has no gas phase (its case.toml has no [gas] section)"
+    assert stderr.strip().splitlines() == [
+        f"fluidem report: skipped pressure: probes.csv has no pressure columns (pressure*, *_Pa), and {no_gas}",
+        f"fluidem report: skipped voidage: {no_gas}",
+        f"fluidem report: skipped solids_fraction: {no_gas}"]
 
 
 def test_report_of_an_incomplete_modified_run(pour_run, tmp_path):
@@ -152,8 +155,9 @@ def test_report_of_an_incomplete_modified_run(pour_run, tmp_path):
     assert rc == 0
     path = run / "report.html"
     assert stdout.strip() == str(path)
-    assert sorted(re.findall(r"skipped (\w+):", stderr)) == ["contacts", "energy", "pressure"]
-    assert len(stderr.splitlines()) == 3
+    assert sorted(re.findall(r"skipped (\w+):", stderr)) == ["contacts", "energy", "pressure", "solids_fraction",
+                                                             "voidage"]
+    assert len(stderr.splitlines()) == 5
     page = parse(path)
     assert len(page.images) == 2  # snapshots and bed height (from the snapshots)
     text = html.unescape(path.read_text())

@@ -29,12 +29,13 @@ def _note(command: str, name: str, why: str) -> None:
 
 def cmd_plot(args) -> int:
     _require_matplotlib("plot")
-    from .plotting.figures import PlotOptions, parse_names, parse_times, plot_run
+    from .plotting.figures import PlotOptions, parse_names, parse_times, parse_window, plot_run
     from .plotting.run import RunData
     from .plotting.style import parse_formats
 
     run = RunData(args.run)
-    options = PlotOptions(times=parse_times(args.times), color=args.color, bands=args.bands)
+    options = PlotOptions(times=parse_times(args.times), color=args.color, bands=args.bands,
+                          overlay=not args.no_overlay, window=parse_window(args.window))
     formats = parse_formats(args.format)
     only = parse_names(args.only)
     out = Path(args.out) if args.out else run.path / "figures"
@@ -92,7 +93,7 @@ def cmd_report(args) -> int:
 def add_commands(subparsers) -> None:
     """Register ``plot``, ``animate``, ``compare`` and ``report`` on an argparse subparsers object."""
     p = subparsers.add_parser(
-        "plot", help="figures of a run (snapshots, energy, contacts, bed height, …)",
+        "plot", help="figures of a run (snapshots, energy, contacts, bed height, pressure, gas maps, …)",
         description="Write the figures that apply to a run directory. A figure whose quantity the run "
                     "lacks is skipped with a one-line note.")
     p.add_argument("run", metavar="RUN", help="run directory (made by `fluidem run --out RUN`)")
@@ -105,7 +106,12 @@ def add_commands(subparsers) -> None:
     p.add_argument("--bands", type=int, default=6, help="number of initial-height bands (default 6)")
     p.add_argument("--format", default="png", metavar="FMT[,FMT]", help="png, svg and/or pdf (default png)")
     p.add_argument("--only", metavar="NAME[,NAME]",
-                   help="only these figures: snapshots, energy, contacts, bed_height, pressure")
+                   help="only these figures: snapshots, energy, contacts, bed_height, pressure, voidage, "
+                        "solids_fraction")
+    p.add_argument("--window", metavar="T0,T1",
+                   help="time window [s] of the time-averaged gas maps (default 5,10 when the run covers it, "
+                        "else the second half of the run)")
+    p.add_argument("--no-overlay", action="store_true", help="draw the gas voidage maps without the particles")
     p.add_argument("--out", metavar="DIR", help="folder for the figures (default RUN/figures)")
     p.set_defaults(func=cmd_plot)
 

@@ -15,10 +15,12 @@ from pathlib import Path
 import numpy as np
 
 from . import _threads
+from .analysis import fluidised as F
 from .analysis import probes as P
 from .case import Case, validate_case
 from .errors import CaseError
 from .io.atomic import write_text_atomic
+from .io.gas_fields import GasFieldWriter
 from .io.probes_csv import ProbeWriter
 from .io.restart import RESTART_NAME, load_restart, save_restart
 from .io.snapshots import ParticleWriter
@@ -99,6 +101,8 @@ class Simulation:
         else:
             self.engine = engine_for(case)
             self.engine.check_initial_overlaps()
+        # hard spheres: total energy at t = 0 for the energy balance of Hoomans 1996 eq. 51
+        self.energy0 = P.collisions(self.engine)["total_energy_J"] if P.is_hard_sphere(self.engine) else None
         self.gas = None
         if case.gas is not None:  # two-way coupled run: gas steps of DT, DEM sub-steps within
             from .coupling.exchange import GasCoupling
@@ -160,10 +164,19 @@ class Simulation:
     def _default_observers(self) -> None:
         o = self.case.output
         end = self.case.time.end
-        self.observers["snapshots"] = ParticleWriter(self.out_dir, EveryTime(o.snapshot_interval or end / 100))
-        self.observers["probes"] = ProbeWriter(
-            self.out_dir, [lambda s: P.energies(s.engine), lambda s: P.contacts(s.engine)],
-            EveryTime(o.probe_interval or end / 1000))
+        extra = {"contacts": lambda s: F.contact_numbers(s.engine).astype(np.int32)}
+        if self.gas is not None:
+            if not P.is_hard_sphere(self.engine):  # collisions are impulses: no contact force to show
+                extra["contact_force"] = lambda s: F.contact_force(s.engine)
+            extra["gas_force"] = lambda s: F.gas_force(s.engine)
+        self.observers["snapshots"] = ParticleWriter(self.out_dir, EveryTime(o.snapshot_interval or end / 100),
+                                                     extra_fields=extra)
+        if self.gas is not None:  # gas fields at the particle snapshot times, written before the checkpoint
+            self.observers["gas_fields"] = GasFieldWriter(self.out_dir, EveryTime(o.snapshot_interval or end / 100))
+        probes = [lambda s: P.energies(s.engine), lambda s: P.contacts(s.engine), F.bed_probes]
+        if P.is_hard_sphere(self.engine):
+            probes.insert(1, lambda s: P.collisions(s.engine))
+        self.observers["probes"] = ProbeWriter(self.out_dir, probes, EveryTime(o.probe_interval or end / 1000))
         self.observers["checkpoint"] = Checkpointer(self.out_dir, EveryTime(o.checkpoint_interval or end / 10))
 
     # ------------------------------------------------------------ stepping
@@ -305,8 +318,22 @@ class Simulation:
         }
         if self.case.particles.dimensions == 2:
             out["packing_fraction"] = P.surface_packing_fraction(eng)
+        if P.is_hard_sphere(eng):
+            h = P.collisions(eng)
+            out.update(collisions=h["collisions"], wall_collisions=h["wall_collisions"],
+                       collisions_per_s=h["collisions"] / self.wall_time if self.wall_time > 0 else None,
+                       collapse_remedy_count=h["remedy_count"],
+                       dissipated_energy_J=h["dissipated_normal_J"] + h["dissipated_tangential_J"])
+            if self.energy0:
+                # Hoomans 1996 eq. 51: relative error of E_kin + E_pot + E_rot + E_dsp
+                out["energy_error_rel"] = abs(h["total_energy_J"] - self.energy0) / abs(self.energy0)
         if self.gas is not None:
             out.update(gas_dt_s=self.gas.gas_dt, gas_steps=self.gas.gas_steps, dem_substeps=self.gas.substeps)
+            out["multicontact_ratio"] = F.multicontact_ratio(F.contact_numbers(eng))
+            out["pressure_drop_bed_Pa"] = F.pressure_drop(self.gas.grid, self.gas.state.p,
+                                                          self.gas.grid.y_centres[-1] + 0.5 * self.gas.grid.dy)
+            if self.out_dir is not None:
+                out.update(F.time_averages(self.out_dir / "probes.csv", self.time))
         out.update(self._summary_extra)
         return out
 
@@ -323,6 +350,8 @@ class Simulation:
     # ------------------------------------------------------------ checkpoints
     def save_checkpoint(self, path: Path) -> None:
         scalars = dict(self.engine.checkpoint_scalars(), wall_time=self.wall_time, particle_steps=self.particle_steps)
+        if self.energy0 is not None:
+            scalars["energy0"] = self.energy0
         arrays = self.engine.checkpoint_arrays()
         if self.gas is not None:
             arrays = {**arrays, **self.gas.checkpoint_arrays()}
@@ -339,6 +368,8 @@ class Simulation:
             self.gas.restore(arrays, scalars)
         self.wall_time = float(scalars.get("wall_time", 0.0))
         self.particle_steps = int(scalars.get("particle_steps", 0))
+        if "energy0" in scalars:
+            self.energy0 = float(scalars["energy0"])
 
     @classmethod
     def resume(cls, out_dir: str | Path, progress: bool = False, threads: int | None = None) -> "Simulation":

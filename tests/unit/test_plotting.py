@@ -27,6 +27,7 @@ from fluidem.plotting.figures import parse_times, select_snapshots, view_of  # n
 from fluidem.plotting.published import PUBLISHED  # noqa: E402
 
 ALL_FIGURES = {"snapshots_height", "energy", "contacts", "bed_height"}  # what a DEM run has
+GAS_ONLY = {"pressure", "voidage", "solids_fraction"}  # what a DEM run lacks: pressure probes and gas fields
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 
@@ -109,8 +110,8 @@ def test_plot_writes_every_figure_of_a_dem_run_as_a_nonblank_png(plotted):
     assert sorted(Path(s) for s in stdout.split()) == sorted(out.glob("*.png"))
     for path in out.glob("*.png"):
         assert_not_blank(read_png(path), path.name)
-    # a DEM run has no gas: the pressure figure is skipped with one line, nothing else is
-    assert set(stderr_notes(err, "plot")) == {"pressure"}
+    # a DEM run has no gas: the gas figures are skipped with one line each, nothing else is
+    assert set(stderr_notes(err, "plot")) == GAS_ONLY
 
 
 def test_default_output_folder_and_svg(pour_run, run_copy, capsys):
@@ -213,11 +214,11 @@ def test_bad_options_are_case_errors_and_write_nothing(pour_run, tmp_path, argv,
 
 
 @pytest.mark.parametrize("remove, skipped", [
-    (["probes.csv"], {"energy", "contacts", "pressure"}),
-    (["particles.h5"], {"snapshots", "bed_height", "pressure"}),
-    (["probes.csv", "particles.h5", "summary.json"], {"snapshots", "energy", "contacts", "bed_height", "pressure"}),
-    ("truncate probes.csv", {"energy", "contacts", "pressure"}),
-    ("corrupt particles.h5", {"snapshots", "bed_height", "pressure"}),
+    (["probes.csv"], {"energy", "contacts"} | GAS_ONLY),
+    (["particles.h5"], {"snapshots", "bed_height"} | GAS_ONLY),
+    (["probes.csv", "particles.h5", "summary.json"], {"snapshots", "energy", "contacts", "bed_height"} | GAS_ONLY),
+    ("truncate probes.csv", {"energy", "contacts"} | GAS_ONLY),
+    ("corrupt particles.h5", {"snapshots", "bed_height"} | GAS_ONLY),
 ])
 def test_a_missing_quantity_skips_its_figure_with_a_one_line_note(run_copy, tmp_path, capsys, remove, skipped):
     run = run_copy()

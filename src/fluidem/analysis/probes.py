@@ -17,6 +17,22 @@ def energies(engine) -> dict[str, float]:
     return {"kinetic_J": ke, "rotational_J": re, "potential_J": pe}
 
 
+def is_hard_sphere(engine) -> bool:
+    """True for the event-driven engine (collisions are instantaneous, energy is booked as dissipated)."""
+    return hasattr(engine, "dissipated_normal_J")
+
+
+def collisions(engine) -> dict[str, float]:
+    """Hard-sphere energy housekeeping (Hoomans 1996 eq. 51): dissipated energy (eqs 23, 27, 29),
+    the total E_kin + E_pot + E_rot + E_dsp, and the collision counts."""
+    e = energies(engine)
+    diss_n, diss_t = float(engine.dissipated_normal_J), float(engine.dissipated_tangential_J)
+    return {"dissipated_normal_J": diss_n, "dissipated_tangential_J": diss_t,
+            "total_energy_J": e["kinetic_J"] + e["rotational_J"] + e["potential_J"] + diss_n + diss_t,
+            "collisions": int(engine.collisions), "wall_collisions": int(engine.wall_collisions),
+            "remedy_count": int(getattr(engine, "remedy_count", 0))}
+
+
 def contacts(engine) -> dict[str, float]:
     """Particle contacts, coordination number (mean contacts per particle) and max overlap / diameter."""
     st = engine.state

@@ -15,7 +15,7 @@ Public surface::
 The particle side enters only as arrays (voidage, β with the solids velocity, or a
 momentum source), so the solver runs and is verified on its own.
 """
-from .boundaries import (BoundaryCondition, FreeSlip, Inflow, Outflow, Periodic, PressureOutlet, Pulse, Segment, Wall,
+from .boundaries import (BoundaryCondition, FreeSlip, Inflow, Outflow, Periodic, PressureOutlet, Pulse, Segment, Table, Wall,
                          boundary_conditions)
 from .grid import (CORNER, FLAG_NAMES, FREE_SLIP, INFLOW, INTERIOR, NO_SLIP, OUTFLOW, PERIODIC, PRESSURE,
                    StaggeredGrid)
@@ -23,7 +23,7 @@ from .solver import GasConvergenceError, GasProperties, GasSolver, GasState, Ste
 
 __all__ = [
     "StaggeredGrid", "GasProperties", "GasSolver", "GasState", "StepInfo", "GasConvergenceError",
-    "gas_step_benchmark", "BoundaryCondition", "Wall", "FreeSlip", "Inflow", "Segment", "Pulse", "PressureOutlet",
+    "gas_step_benchmark", "BoundaryCondition", "Wall", "FreeSlip", "Inflow", "Segment", "Pulse", "Table", "PressureOutlet",
     "Outflow", "Periodic", "boundary_conditions", "INTERIOR", "FREE_SLIP", "NO_SLIP", "INFLOW", "PRESSURE",
     "OUTFLOW", "CORNER", "PERIODIC", "FLAG_NAMES",
 ]

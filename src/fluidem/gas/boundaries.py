@@ -109,6 +109,33 @@ class Pulse:
 
 
 @dataclass(frozen=True)
+class Table:
+    """A velocity interpolated linearly in time between ``(t, value)`` points, constant beyond the ends.
+
+    Example: a slow sweep of the superficial velocity from 0 to 0.4 m/s over 2 s for a
+    minimum-fluidisation measurement, ``Table(((0.0, 0.0), (2.0, 0.4)))``. [s], [m/s].
+    """
+
+    points: tuple[tuple[float, float], ...]
+
+    def __post_init__(self):
+        pts = tuple((float(t), float(v)) for t, v in self.points)
+        if not pts:
+            raise CaseError("Table.points: give at least one (t, value) pair")
+        for k, (t, v) in enumerate(pts):
+            _check_value(f"Table.points[{k}] time", t)
+            _check_value(f"Table.points[{k}] value", v)
+        times = [t for t, _ in pts]
+        if any(b <= a for a, b in zip(times, times[1:])):
+            raise CaseError(f"Table.points: times {times} must increase strictly")
+        object.__setattr__(self, "points", pts)
+
+    def __call__(self, t: float) -> float:
+        times = [p[0] for p in self.points]
+        return float(np.interp(t, times, [p[1] for p in self.points]))
+
+
+@dataclass(frozen=True)
 class Segment:
     """One stretch of an inflow side with one velocity: the background or an orifice/jet.
 

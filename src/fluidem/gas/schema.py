@@ -21,6 +21,9 @@ Example (TOML)::
     kind = "inflow"
     voidage = 0.4
     segments = [{superficial = 1.8}, {interstitial = 45.0, start = 0.07, end = 0.08}]
+
+A velocity may change in time: ``{pulse = 2.5, start = 0.0, duration = 0.2, otherwise = 0.5}``
+(Hoomans 1996 §5.4) or ``{table = [[0.0, 0.0], [2.0, 0.4]]}`` (linear between (t, value) points).
 """
 from __future__ import annotations
 
@@ -29,7 +32,7 @@ from typing import Literal
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from ..errors import CaseError
-from .boundaries import Inflow, PressureOutlet, Segment, boundary_conditions
+from .boundaries import Inflow, PressureOutlet, Pulse, Segment, Table, boundary_conditions
 from .grid import SIDES, StaggeredGrid
 from .solver import GasProperties, GasSolver
 
@@ -73,11 +76,39 @@ class PropertiesSpec(_Strict):
         return GasProperties(**self.model_dump())
 
 
+class PulseSpec(_Strict):
+    """A velocity ``pulse`` [m/s] for start <= t < start + duration, ``otherwise`` outside (``Pulse``)."""
+
+    pulse: float
+    start: float = Field(0.0, description="[s]")
+    duration: float = Field(gt=0.0, description="[s]")
+    otherwise: float = Field(0.0, description="[m/s]")
+
+    def build(self) -> Pulse:
+        return Pulse(self.pulse, start=self.start, duration=self.duration, otherwise=self.otherwise)
+
+
+class TableSpec(_Strict):
+    """A velocity linear in time between ``[t, value]`` points, constant beyond the ends (``Table``)."""
+
+    table: list[tuple[float, float]] = Field(min_length=1, description="[[t (s), velocity (m/s)], ...]")
+
+    def build(self) -> Table:
+        return Table(tuple(self.table))
+
+
+Velocity = float | PulseSpec | TableSpec
+
+
+def _velocity(value):
+    return value.build() if isinstance(value, (PulseSpec, TableSpec)) else value
+
+
 class SegmentSpec(_Strict):
     """One stretch of an inflow side (``Segment``): exactly one of interstitial / superficial [m/s]."""
 
-    interstitial: float | None = None
-    superficial: float | None = None
+    interstitial: Velocity | None = None
+    superficial: Velocity | None = None
     start: float | None = Field(None, description="[m] along the side (x on bottom/top, y on left/right)")
     end: float | None = None
 
@@ -88,8 +119,8 @@ class BoundarySpec(_Strict):
     kind: str
     segments: list[SegmentSpec] | None = None
     voidage: float | None = Field(None, description="inflow: voidage of the influx cells [-]")
-    superficial: float | None = Field(None, description="inflow: superficial velocity over the whole side [m/s]")
-    interstitial: float | None = Field(None, description="inflow: interstitial velocity over the whole side [m/s]")
+    superficial: Velocity | None = Field(None, description="inflow: superficial velocity over the whole side [m/s]")
+    interstitial: Velocity | None = Field(None, description="inflow: interstitial velocity over the whole side [m/s]")
     pressure: float | None = Field(None, description="pressure_outlet: pressure [Pa]; default reference_pressure")
 
     @field_validator("kind")
@@ -115,9 +146,10 @@ class BoundarySpec(_Strict):
         cls = boundary_conditions.get(self.kind)
         try:
             if cls is Inflow:
-                kw = {k: getattr(self, k) for k in ("voidage", "superficial", "interstitial")
+                kw = {k: _velocity(getattr(self, k)) for k in ("voidage", "superficial", "interstitial")
                       if getattr(self, k) is not None}
-                segs = tuple(Segment(**s.model_dump()) for s in (self.segments or []))
+                segs = tuple(Segment(**{k: _velocity(getattr(s, k)) for k in ("interstitial", "superficial")},
+                                     start=s.start, end=s.end) for s in (self.segments or []))
                 return Inflow(segments=segs, **kw)
             if cls is PressureOutlet:
                 return PressureOutlet(pressure=self.pressure)

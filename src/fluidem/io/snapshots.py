@@ -1,7 +1,8 @@
 """Particle snapshots in one HDF5 file, indexed by an XDMF file that ParaView opens.
 
 Layout of ``particles.h5``: ``/snapshots/<6-digit index>/{position, velocity, omega,
-diameter, species, id}`` with attribute ``time`` [s]. ``particles.xdmf`` is a temporal
+diameter, species, id}`` plus the writer's extra fields (e.g. ``contacts`` N_c,
+``contact_force``, ``gas_force``), with attributes ``time`` [s] and ``step``. ``particles.xdmf`` is a temporal
 collection of Polyvertex grids pointing at those datasets; it is rewritten atomically
 after every snapshot so it is always valid.
 """
@@ -51,7 +52,8 @@ class ParticleWriter:
                 g[name] = fn(sim)
             times = [(k, float(grp[k].attrs["time"])) for k in sorted(grp)]
             n = st.n
-        write_text_atomic(self.xdmf, xdmf_text(self.path.name, times, n))
+            fields = _field_layout(g)
+        write_text_atomic(self.xdmf, xdmf_text(self.path.name, times, n, fields))
 
     def truncate_after(self, step: int) -> None:
         """Drop snapshots later than ``step`` (used on resume)."""
@@ -64,17 +66,32 @@ class ParticleWriter:
                     del grp[k]
             times = [(k, float(grp[k].attrs["time"])) for k in sorted(grp)]
             n = grp[times[0][0]]["position"].shape[0] if times else 0
-        write_text_atomic(self.xdmf, xdmf_text(self.path.name, times, n))
+            fields = _field_layout(grp[times[-1][0]]) if times else None
+        write_text_atomic(self.xdmf, xdmf_text(self.path.name, times, n, fields))
 
 
-def xdmf_text(h5name: str, times: list[tuple[str, float]], n: int) -> str:
+def _field_layout(group) -> dict[str, tuple[str, int, str, int]]:
+    """name → (XDMF attribute type, components, number type, precision) of a snapshot's datasets."""
+    out = {}
+    for name in group:
+        if name == "position":
+            continue
+        ds = group[name]
+        comp = ds.shape[1] if ds.ndim == 2 else 1
+        num = "Int" if np.issubdtype(ds.dtype, np.integer) else "Float"
+        out[name] = ("Vector" if comp == 3 else "Scalar", comp, num, ds.dtype.itemsize)
+    return out
+
+
+def xdmf_text(h5name: str, times: list[tuple[str, float]], n: int, fields=None) -> str:
+    if fields is None:
+        fields = {k: (kind, comp, "Int" if k in ("species", "id") else "Float", 4 if k == "species" else 8)
+                  for k, (kind, comp) in FIELDS.items()}
     grids = []
     for key, t in times:
         attrs = []
-        for name, (kind, comp) in FIELDS.items():
-            dims = f"{n} 3" if comp == 3 else f"{n}"
-            num = "Int" if name in ("species", "id") else "Float"
-            prec = 4 if name == "species" else 8
+        for name, (kind, comp, num, prec) in fields.items():
+            dims = f"{n} {comp}" if comp > 1 else f"{n}"
             attrs.append(
                 f'      <Attribute Name="{name}" AttributeType="{kind}" Center="Node">\n'
                 f'        <DataItem Dimensions="{dims}" NumberType="{num}" Precision="{prec}" Format="HDF">'

@@ -9,7 +9,12 @@ probes, segregation indices) is one more decorated function here, nothing else.
 Registered today: ``snapshots`` (particles at chosen times, Hoomans et al. 1996 Figs
 8/10/12), ``energy`` (budget against time, Hoomans Fig 9), ``contacts`` (coordination
 number and contacts, Sun et al. 2007), ``bed_height`` (mean particle height, Sun 2007),
-``pressure`` (probe columns ending ``_Pa``; present once the gas solver writes them).
+``pressure`` (pressure probes against time and their power spectrum with the dominant
+frequency, Hoomans Figs 11/13 and Sun Fig 3: probe columns ``pressure*`` / ``*_Pa``, else
+the gas field 0.2 m above the bottom centre), ``voidage`` (gas voidage maps at chosen
+times with the particles over them, Hoomans Figs 10/12) and ``solids_fraction``
+(time-averaged solids fraction map, Sun Figs 4/8/13). The gas figures read ``gas.h5``
+(``fluidem.io.gas_fields``).
 """
 from __future__ import annotations
 
@@ -33,20 +38,33 @@ class PlotOptions:
     """Choices shared by the figures.
 
     times : snapshot times [s] to draw (nearest snapshot each); None: ``DEFAULT_PANELS``
-        evenly spaced, first and last included.
+        evenly spaced, first and last included. Used by the particle and voidage maps.
     color : "height" (band of initial height), "speed" (|v| [m/s]) or "species".
     bands : number of initial-height bands.
+    overlay : draw the particles over the gas voidage maps.
+    window : (t0, t1) [s] of the time average of gas fields; None: 5-10 s when the run
+        covers it (Sun et al. 2007), else the second half of the run.
     """
 
     times: list[float] | None = None
     color: str = "height"
     bands: int = 6
+    overlay: bool = True
+    window: tuple[float, float] | None = None
 
     def __post_init__(self):
         if self.color not in COLOR_MODES:
             raise CaseError(f"--color {self.color!r}: allowed are {', '.join(COLOR_MODES)}")
         if int(self.bands) < 1:
             raise CaseError(f"--bands {self.bands}: give a whole number of at least 1")
+        if self.window is not None:
+            try:
+                t0, t1 = (float(t) for t in self.window)
+            except (TypeError, ValueError):
+                raise CaseError(f"--window {self.window!r}: give two times in seconds, T0,T1") from None
+            if not (np.isfinite(t0) and np.isfinite(t1) and t0 < t1):
+                raise CaseError(f"--window {t0:g},{t1:g}: give finite times with T0 < T1 [s]")
+            self.window = (t0, t1)
 
 
 @dataclass(frozen=True)
@@ -113,8 +131,13 @@ def plot_run(run: RunData, out_dir: Path, options: PlotOptions | None = None, fo
              only: list[str] | None = None) -> PlotResult:
     """Write every figure that applies to ``run`` into ``out_dir``; the others are listed as skipped."""
     options = options or PlotOptions()
+    # bad --times / --window: an error before anything is written
     if options.times is not None and run.lacks_snapshots() is None:
-        select_snapshots(run.snapshot_times, options.times)  # bad --times: error before anything is written
+        select_snapshots(run.snapshot_times, options.times)
+    elif options.times is not None and run.lacks_gas() is None and (only is None or "voidage" in only):
+        select_snapshots(run.gas_times, options.times)
+    if options.window is not None and run.lacks_gas() is None and (only is None or "solids_fraction" in only):
+        averaging_window(run.gas_times, options.window)
     result = PlotResult()
     out_dir = Path(out_dir)
     with style.context():
@@ -131,6 +154,20 @@ def plot_run(run: RunData, out_dir: Path, options: PlotOptions | None = None, fo
 
 
 # ---------------------------------------------------------------- snapshot selection
+def parse_window(text: str | None) -> tuple[float, float] | None:
+    """``"5,10"`` → (5.0, 10.0); CaseError unless two numbers T0 < T1."""
+    if text is None:
+        return None
+    items = [t for t in str(text).split(",") if t.strip()]
+    try:
+        values = [float(t) for t in items]
+    except ValueError:
+        values = []
+    if len(values) != 2:
+        raise CaseError(f"--window {text!r}: give two times in seconds, e.g. --window 5,10")
+    return values[0], values[1]
+
+
 def parse_times(text: str | None) -> list[float] | None:
     """``"0,0.5,1"`` → [0.0, 0.5, 1.0]; CaseError naming an item that is not a number."""
     if text is None:
@@ -480,27 +517,245 @@ def draw_bed_height(run: RunData, options: PlotOptions):
     return fig
 
 
+PRESSURE_PROBE_HEIGHT = 0.2  # [m] above the bottom: Hoomans et al. 1996 Figs 11/13, Sun et al. 2007 Fig 3
+
+
 def _pressure_columns(run: RunData) -> list[str]:
-    return [c for c in run.probe_columns() if c.endswith("_Pa")]
+    """probes.csv columns holding pressures: names starting with ``pressure`` or ending ``_Pa``."""
+    return [c for c in run.probe_columns() if c.startswith("pressure") or c.endswith("_Pa")]
 
 
 def _lacks_pressure(run: RunData) -> str | None:
-    why = run.lacks_probes()
-    if why is None and not _pressure_columns(run):
-        why = "probes.csv has no pressure columns (*_Pa); runs with a gas solver write them"
-    return why
+    probe_why = run.lacks_probes()
+    if probe_why is None and _pressure_columns(run):
+        return None
+    gas_why = run.lacks_gas("p")
+    if gas_why is None:
+        if len(run.gas_times) >= 2:
+            return None
+        gas_why = f"gas.h5 has {len(run.gas_times)} snapshot; a trace needs 2"
+    probe_why = probe_why or "probes.csv has no pressure columns (pressure*, *_Pa)"
+    return f"{probe_why}, and {gas_why}"
 
 
-@figure("pressure", "gas pressure probes against time (Hoomans et al. 1996 Figs 11 and 13)",
+def pressure_probe_cell(x_centres: np.ndarray, y_centres: np.ndarray, dy: float,
+                        height: float = PRESSURE_PROBE_HEIGHT) -> tuple[int, int]:
+    """(i, j) of the cell at the bottom centre's x holding ``height`` [m] (the top row if the domain is lower)."""
+    x_mid = 0.5 * (x_centres[0] + x_centres[-1])
+    i = int(np.argmin(np.abs(x_centres - x_mid)))
+    bottom = y_centres[0] - 0.5 * dy
+    j = int(np.clip(np.floor((height - bottom) / dy), 0, len(y_centres) - 1))
+    return i, j
+
+
+def power_spectrum(t: np.ndarray, y: np.ndarray):
+    """One-sided power spectral density of a sampled signal, its mean removed.
+
+    The samples are put on a uniform time grid (the median interval; probes fire on the
+    first step after each multiple of their interval, so they are nearly uniform already)
+    and Welch's method with a Hann window gives the PSD, with segments of a quarter of the
+    record (at least 256 samples, at most all of it).
+
+    Returns (frequency [Hz], PSD [unit^2/Hz], dominant frequency [Hz]: the peak above 0 Hz),
+    or None with fewer than 8 finite samples.
+    """
+    from scipy.signal import welch
+
+    ok = np.isfinite(t) & np.isfinite(y)
+    t, y = np.asarray(t, float)[ok], np.asarray(y, float)[ok]
+    if len(t) < 8:
+        return None
+    order = np.argsort(t)
+    t, y = t[order], y[order]
+    dt = float(np.median(np.diff(t)))
+    if not dt > 0:
+        return None
+    n = int(np.floor((t[-1] - t[0]) / dt + 1e-9)) + 1
+    tu = t[0] + dt * np.arange(n)
+    yu = np.interp(tu, t, y)
+    nperseg = int(min(n, max(256, n // 4)))
+    f, psd = welch(yu - yu.mean(), fs=1.0 / dt, window="hann", nperseg=nperseg, detrend="constant")
+    if len(f) < 2:
+        return None
+    dominant = float(f[1 + int(np.argmax(psd[1:]))])
+    return f, psd, dominant
+
+
+def _pressure_traces(run: RunData) -> tuple[list[tuple[str, np.ndarray, np.ndarray]], str, str]:
+    """(label, time [s], pressure [Pa]) per trace, the y label, and where the traces come from."""
+    if run.lacks_probes() is None and _pressure_columns(run):
+        p = run.probes
+        traces = [(style.label(c).split(" [")[0], p["time_s"], p[c]) for c in _pressure_columns(run)]
+        return traces, "pressure [Pa]", "probes.csv"
+    g = run.gas
+    dy = float(g["y_faces"][1] - g["y_faces"][0])
+    i, j = pressure_probe_cell(g["x"], g["y"], dy)
+    p_ref = float(run.case.get("gas", {}).get("properties", {}).get("reference_pressure", 101325.0))
+    label = f"cell centre x = {g['x'][i]:.3g} m, y = {g['y'][j]:.3g} m"
+    return [(label, g["time"], g["p"][:, i, j] - p_ref)], f"p − {p_ref:.6g} Pa [Pa]", "gas.h5"
+
+
+@figure("pressure", "gas pressure at probes against time and its power spectrum with the dominant frequency "
+                    "(Hoomans et al. 1996 Figs 11 and 13; Sun et al. 2007 Fig 3)",
         lacks=_lacks_pressure)
 def draw_pressure(run: RunData, options: PlotOptions):
-    p = run.probes
-    fig, (ax,) = _trace_axes()
-    cols = _pressure_columns(run)
-    for c in cols:
-        ax.plot(p["time_s"], p[c], label=style.label(c).split(" [")[0])
-    ax.set_ylabel("pressure [Pa]")
-    ax.set_title("pressure")
-    if len(cols) > 1:
+    traces, ylabel, source = _pressure_traces(run)
+    w, h = style.TRACE_SIZE_IN
+    fig = style.new_figure(w, 1.75 * h)
+    ax, ax_f = fig.subplots(2, 1, squeeze=True)
+    for k, (label, t, y) in enumerate(traces):
+        colour = style.LINE_COLOURS[k % len(style.LINE_COLOURS)]
+        ax.plot(t, y, color=colour, label=label)
+        spec = power_spectrum(t, y)
+        if spec is None:
+            continue
+        f, psd, dominant = spec
+        ax_f.plot(f, psd, color=colour, label=f"{label}: dominant {dominant:.3g} Hz")
+        ax_f.axvline(dominant, color=colour, ls="--", lw=0.9)
+        peak = float(psd[1 + int(np.argmax(psd[1:]))])
+        ax_f.annotate(f"{dominant:.3g} Hz", (dominant, peak), xytext=(4, 2), textcoords="offset points",
+                      color=colour, fontsize=style.RC["legend.fontsize"])
+    ax.set_xlabel(style.label("time_s"))
+    ax.set_ylabel(ylabel)
+    ax.set_title(f"pressure ({source})")
+    if len(traces) > 1 or source == "gas.h5":
         ax.legend(loc="best")
+    ax_f.set_xlabel(style.label("frequency_Hz"))
+    ax_f.set_ylabel("power spectral density [Pa²/Hz]")
+    ax_f.set_title("power spectrum of the fluctuations")
+    if ax_f.lines:
+        positive = [ln.get_ydata() for ln in ax_f.lines if len(np.atleast_1d(ln.get_ydata())) > 2]
+        if positive and all(np.nanmax(v) > 0 for v in positive):
+            ax_f.set_yscale("log")
+        ax_f.legend(loc="best")
+    else:
+        ax_f.text(0.5, 0.5, "too few samples for a spectrum (8 needed)", transform=ax_f.transAxes,
+                  ha="center", va="center")
+    return fig
+
+
+# ---------------------------------------------------------------- gas-field maps
+def averaging_window(times: np.ndarray, requested: tuple[float, float] | None = None) -> tuple[float, float, np.ndarray]:
+    """(t0, t1, mask of ``times`` inside) of a time average of gas fields.
+
+    ``requested=None``: 5-10 s when the snapshots cover it (Sun et al. 2007 Figs 4/8/13),
+    else the second half of the snapshots' span. A requested window with no snapshot in it
+    is a CaseError.
+    """
+    times = np.asarray(times, float)
+    tol = 1e-9 * max(abs(times[-1]), 1.0)
+    if requested is None:
+        if times[0] <= 5.0 + tol and times[-1] >= 10.0 - tol:
+            t0, t1 = 5.0, 10.0
+        else:
+            t0, t1 = times[0] + 0.5 * (times[-1] - times[0]), times[-1]
+    else:
+        t0, t1 = requested
+    mask = (times >= t0 - tol) & (times <= t1 + tol)
+    if not mask.any():
+        raise CaseError(f"--window {t0:g},{t1:g}: no gas-field snapshot in it; the gas fields run from "
+                        f"{times[0]:g} s to {times[-1]:g} s ({len(times)} snapshots)")
+    return float(t0), float(t1), mask
+
+
+def _map_axes(run: RunData, npanels: int, colourbar: bool = True):
+    """A row of ``npanels`` map axes sized to the gas domain, the x–y plane of the grid."""
+    g = run.gas
+    xf, yf = g["x_faces"], g["y_faces"]
+    aspect = (xf[-1] - xf[0]) / (yf[-1] - yf[0])
+    panel_w = float(np.clip(style.PANEL_HEIGHT_IN * aspect, 1.4, 8.0))
+    # "compressed": constrained layout for fixed-aspect panels (plain constrained layout narrows them
+    # after placing their labels, which can push the y label off the edge)
+    fig = style.new_figure(npanels * panel_w + (1.6 if colourbar else 0.7), style.PANEL_HEIGHT_IN + 0.8,
+                           layout="compressed")
+    axes = fig.subplots(1, npanels, sharey=True, squeeze=False)[0]
+    for k, ax in enumerate(axes):
+        ax.set_xlim(xf[0], xf[-1])
+        ax.set_ylim(yf[0], yf[-1])
+        ax.set_aspect("equal")
+        ax.grid(False)
+        ax.set_xlabel("x [m]")
+        if k == 0:
+            ax.set_ylabel("y [m]")
+    return fig, axes
+
+
+def _matching_particle_snapshots(run: RunData, times: list[float]) -> list[int | None]:
+    """Index of the particle snapshot at each time (within half a snapshot interval), else None."""
+    if run.lacks_snapshots() is not None:
+        return [None] * len(times)
+    pt = run.snapshot_times
+    tol = 0.5 * float(np.median(np.diff(pt))) if len(pt) > 1 else 0.0
+    tol = max(tol, 1e-9 * max(abs(pt[-1]), 1.0))
+    out = []
+    for t in times:
+        k = int(np.argmin(np.abs(pt - t)))
+        out.append(k if abs(pt[k] - t) <= tol else None)
+    return out
+
+
+def _lacks_voidage(run: RunData) -> str | None:
+    return run.lacks_gas("voidage")
+
+
+@figure("voidage", "gas voidage maps at chosen times with the particles drawn over them "
+                   "(Hoomans et al. 1996 Figs 10/12)", lacks=_lacks_voidage)
+def draw_voidage(run: RunData, options: PlotOptions):
+    from matplotlib.colors import Normalize
+
+    g = run.gas
+    try:
+        indices = select_snapshots(g["time"], options.times)
+    except CaseError as err:
+        raise Unavailable(f"{err} (gas fields)") from None
+    times = [float(g["time"][k]) for k in indices]
+    maps = [g["voidage"][k] for k in indices]
+    lowest = float(np.nanmin(maps))
+    norm = Normalize(vmin=min(lowest, 0.999), vmax=1.0)
+    fig, axes = _map_axes(run, len(indices))
+    particles = _matching_particle_snapshots(run, times) if options.overlay else [None] * len(times)
+    mesh = None
+    for ax, t, eps, kp in zip(axes, times, maps, particles):
+        mesh = ax.pcolormesh(g["x_faces"], g["y_faces"], eps.T, cmap=style.VOIDAGE_COLOURMAP, norm=norm,
+                             shading="flat", rasterized=True)
+        if kp is not None:
+            _draw_particles_over_map(ax, run.snapshot(kp))
+        ax.set_title(_time_title(t))
+    fig.colorbar(mesh, ax=list(axes), label=style.label("voidage"), shrink=0.8)
+    if options.overlay and any(k is None for k in particles):
+        fig.suptitle("particles drawn where a particle snapshot matches the time", fontsize=style.RC["font.size"])
+    return fig
+
+
+def _draw_particles_over_map(ax, snap: dict) -> None:
+    """Particles (true diameter, x–y plane of the gas grid) as translucent discs over a gas map."""
+    from matplotlib.collections import EllipseCollection
+
+    d = np.asarray(snap["diameter"], float)
+    n = len(d)
+    coll = EllipseCollection(d, d, np.zeros(n), units="xy", offsets=snap["position"][:, :2],
+                             offset_transform=ax.transData, facecolors=[style.MAP_PARTICLE_FACE],
+                             edgecolors=style.MAP_PARTICLE_EDGE, linewidths=0.3)
+    ax.add_collection(coll)
+
+
+@figure("solids_fraction", "time-averaged solids fraction 1 − ε of the gas cells over a window "
+                           "(default 5-10 s, else the second half of the run; Sun et al. 2007 Figs 4/8/13)",
+        lacks=lambda run: run.lacks_gas("voidage"))
+def draw_solids_fraction(run: RunData, options: PlotOptions):
+    from matplotlib.colors import Normalize
+
+    g = run.gas
+    try:
+        t0, t1, mask = averaging_window(g["time"], options.window)
+    except CaseError as err:
+        raise Unavailable(str(err)) from None
+    mean = np.nanmean(1.0 - g["voidage"][mask], axis=0)
+    fig, (ax,) = _map_axes(run, 1)
+    norm = Normalize(vmin=0.0, vmax=max(float(np.nanmax(mean)), 1e-3))
+    mesh = ax.pcolormesh(g["x_faces"], g["y_faces"], mean.T, cmap=style.SOLIDS_COLOURMAP, norm=norm,
+                         shading="flat", rasterized=True)
+    fig.colorbar(mesh, ax=ax, label="mean " + style.label("solids_fraction"), shrink=0.8)
+    n = int(mask.sum())
+    ax.set_title(f"mean over t = {t0:.3g}–{t1:.3g} s\n({n} snapshot{'s' if n != 1 else ''})")
     return fig

@@ -1,9 +1,10 @@
-"""Read a run directory for plotting: case, summary, probes and particle snapshots.
+"""Read a run directory for plotting: case, summary, probes, particle snapshots and gas fields.
 
 ``RunData(path)`` checks that ``path`` is a run directory (it holds ``case.toml``) and
 raises ``CaseError`` otherwise. Everything else is optional: a quantity the run lacks
-(no ``probes.csv``, no ``particles.h5``, a column that is not there) is reported by
-``RunData.lacks_*`` as a one-line reason, so figures skip with a note instead of failing.
+(no ``probes.csv``, no ``particles.h5``, no ``gas.h5``, a column that is not there) is
+reported by ``RunData.lacks_*`` as a one-line reason, so figures skip with a note instead
+of failing.
 Readers only read; nothing in the run directory is changed.
 """
 from __future__ import annotations
@@ -23,6 +24,7 @@ CASE_FILE = "case.toml"
 SUMMARY_FILE = "summary.json"
 PROBES_FILE = "probes.csv"
 SNAPSHOT_FILE = "particles.h5"
+GAS_FILE = "gas.h5"
 
 
 class Unavailable(Exception):
@@ -232,3 +234,49 @@ class RunData:
                     yield t, {name: np.asarray(g[name]) for name in fields if name in g}
         except (OSError, KeyError, ValueError) as err:
             raise Unavailable(f"{SNAPSHOT_FILE} cannot be read: {err}") from None
+
+    # ------------------------------------------------------------ gas fields
+    @property
+    def has_gas_phase(self) -> bool:
+        """The case has a ``[gas]`` section (a coupled run)."""
+        return isinstance(self.case.get("gas"), dict)
+
+    @cached_property
+    def _gas(self) -> tuple[dict[str, np.ndarray] | None, str | None]:
+        path = self.path / GAS_FILE
+        if not path.is_file():
+            if not self.has_gas_phase:
+                return None, "the run has no gas phase (its case.toml has no [gas] section)"
+            return None, f"the run has no gas fields ({GAS_FILE})"
+        from ..io.gas_fields import read_gas_fields
+
+        try:
+            data = read_gas_fields(path)
+        except (OSError, KeyError, ValueError) as err:
+            return None, f"{GAS_FILE} cannot be read: {str(err).splitlines()[0] if str(err) else type(err).__name__}"
+        if len(data["time"]) == 0:
+            return None, f"{GAS_FILE} holds no complete snapshots"
+        return data, None
+
+    def lacks_gas(self, *fields: str) -> str | None:
+        """Why the run cannot give gas-field maps of ``fields`` (None when it can)."""
+        data, why = self._gas
+        if data is None:
+            return why
+        missing = [f for f in fields if f not in data or not np.isfinite(data[f]).any()]
+        if missing:
+            return f"{GAS_FILE} has no field {', '.join(missing)}"
+        return None
+
+    @property
+    def gas(self) -> dict[str, np.ndarray]:
+        """``gas.h5`` as ``fluidem.io.read_gas_fields`` returns it (fields (T, nx, ny)); raises ``Unavailable``."""
+        data, why = self._gas
+        if data is None:
+            raise Unavailable(why)
+        return data
+
+    @property
+    def gas_times(self) -> np.ndarray:
+        """Times [s] of the gas-field snapshots, in order; raises ``Unavailable``."""
+        return self.gas["time"]

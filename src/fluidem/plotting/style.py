@@ -38,6 +38,10 @@ BAND_COLOURS = ("#1B3A5C", "#F2C14E")
 UNBANDED_COLOUR = "#9E9E9E"  # particles that were not in the first snapshot
 SPEED_COLOURMAP = "viridis"
 WALL_COLOUR = "#404040"
+VOIDAGE_COLOURMAP = "cividis"  # gas voidage maps: dense bed dark, bubbles and freeboard light
+SOLIDS_COLOURMAP = "magma_r"  # solids fraction maps: dense bed dark, freeboard white
+MAP_PARTICLE_FACE = (1.0, 1.0, 1.0, 0.35)  # particles drawn over a gas map: translucent, so the map shows
+MAP_PARTICLE_EDGE = "#202020"
 
 PANEL_HEIGHT_IN = 4.2  # height of one particle-snapshot panel [in]
 TRACE_SIZE_IN = (6.4, 3.6)  # one time-trace panel [in]
@@ -54,9 +58,13 @@ LABELS = {  # probe and summary columns with their names and units
     "mean_bed_height_m": "mean particle height [m]",
     "bed_height_m": "bed height [m]",
     "packing_fraction": "packing fraction [–]",
+    "voidage": "voidage ε [–]",
+    "solids_fraction": "solids fraction 1 − ε [–]",
+    "p": "pressure [Pa]",
+    "frequency_Hz": "frequency [Hz]",
 }
 UNIT_SUFFIXES = {"J": "J", "m": "m", "s": "s", "Pa": "Pa", "N": "N", "W": "W", "m_s": "m/s", "kg": "kg",
-                 "rel": "–", "per_s": "1/s"}
+                 "rel": "–", "per_s": "1/s", "Hz": "Hz"}
 
 
 def label(column: str) -> str:

@@ -1,0 +1,243 @@
+"""The analyses of Sun et al. 2007 for fluidised beds: contacts, forces, pressure, averages.
+
+Definitions (Sun 2007, §4):
+
+- ``N_c`` of a particle: its number of contacting particle neighbours (wall contacts are
+  not neighbours); the bulk coordination number (Fig 5) is the mean of N_c.
+- multicontact ratio (Fig 11): particles with N_c > 1 over particles with N_c ≥ 1.
+- contact force of a particle: the sum of its particle and wall contact forces; drag
+  force: the gas force on it (drag, plus −V_p∇p when that force is on). Maps (Figs 7/12)
+  are cell means of the magnitudes scaled by the particle weight m g, and the cell ratio
+  of contact to drag force (−1 where the drag is zero, as Sun's legend).
+- pressure drop at a height (Fig 3): the width-averaged gas pressure at the inlet
+  boundary minus that at the height, both linearly interpolated (extrapolated to the
+  inlet) between cell-centre rows.
+- pressure 20 cm above the jet (Hoomans 1996 Figs 11/13): the gauge pressure (relative to
+  the reference pressure) at mid-width, bilinear between cell centres.
+- mean particle height (Fig 9): the arithmetic mean of the particle centres' heights
+  above the floor.
+
+Time averages for ``summary.json`` are taken from ``probes.csv`` over 5–10 s (Sun's
+window) when the run reaches 10 s, else over the second half of the run; the window
+used is reported.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ._contacts_kernels import contact_counts
+
+PRESSURE_PROBE_HEIGHT = 0.20  # [m] above the inlet, Sun 2007 Fig 3 / Hoomans 1996 §5.3
+SUN_WINDOW = (5.0, 10.0)  # [s] Sun 2007 time averages
+
+
+def contact_numbers(engine) -> np.ndarray:
+    """N_c per particle (particle–particle contacts only), (N,) int64."""
+    st = engine.state
+    row_start = getattr(engine, "row_start", None)
+    if row_start is None or st.n == 0:
+        return np.zeros(st.n, dtype=np.int64)
+    per, _, _ = contact_counts(st.position, st.radius, row_start, engine.partner)
+    return per
+
+
+def multicontact_ratio(nc: np.ndarray) -> float:
+    """Particles in multicontact (N_c > 1) over particles in contact (N_c ≥ 1); NaN when none touch."""
+    touching = int(np.count_nonzero(nc >= 1))
+    return float(np.count_nonzero(nc >= 2) / touching) if touching else math.nan
+
+
+def contact_force(engine) -> np.ndarray:
+    """Sum of the contact forces (particles and walls) on each particle [N], (N, 3).
+
+    The engine's total force is contacts + m g + gas force (``ext_force``); soft-sphere
+    engines only (hard-sphere collisions are impulses and have no force).
+    """
+    st = engine.state
+    return st.force - st.mass[:, None] * engine.gravity[None, :] - engine.ext_force
+
+
+def gas_force(engine) -> np.ndarray:
+    """The gas force on each particle [N], (N, 3) (drag, with −V_p∇p when enabled)."""
+    return engine.ext_force.copy()
+
+
+def pressure_at_heights(grid, p: np.ndarray, heights) -> np.ndarray:
+    """Width-averaged pressure [Pa] at the given heights, linear in y between cell-centre rows."""
+    yc = grid.y_centres
+    prof = np.asarray(p, float).mean(axis=0)
+    h = np.atleast_1d(np.asarray(heights, float))
+    out = np.interp(h, yc, prof)
+    # np.interp clamps; extrapolate linearly below the first and above the last centre
+    lo, hi = h < yc[0], h > yc[-1]
+    if yc.size > 1:
+        out[lo] = prof[0] + (h[lo] - yc[0]) * (prof[1] - prof[0]) / (yc[1] - yc[0])
+        out[hi] = prof[-1] + (h[hi] - yc[-1]) * (prof[-1] - prof[-2]) / (yc[-1] - yc[-2])
+    return out
+
+
+def pressure_drop(grid, p: np.ndarray, height: float = PRESSURE_PROBE_HEIGHT) -> float:
+    """p(inlet) − p(height) [Pa], width-averaged (Sun 2007 Fig 3)."""
+    a, b = pressure_at_heights(grid, p, [0.0, height])
+    return float(a - b)
+
+
+def pressure_at(grid, p: np.ndarray, x: float, y: float) -> float:
+    """Gas pressure [Pa] at (x, y), bilinear between cell centres (clamped to the outermost centres)."""
+    xc, yc = grid.x_centres, grid.y_centres
+    fx = float(np.clip((x - xc[0]) / grid.dx, 0.0, xc.size - 1))
+    fy = float(np.clip((y - yc[0]) / grid.dy, 0.0, yc.size - 1))
+    i, j = min(int(fx), xc.size - 2) if xc.size > 1 else 0, min(int(fy), yc.size - 2) if yc.size > 1 else 0
+    a, b = fx - i, fy - j
+    i1, j1 = min(i + 1, xc.size - 1), min(j + 1, yc.size - 1)
+    return float((1 - a) * (1 - b) * p[i, j] + a * (1 - b) * p[i1, j] + (1 - a) * b * p[i, j1] + a * b * p[i1, j1])
+
+
+def bed_probes(sim) -> dict[str, float]:
+    """probes.csv columns of a fluidised bed: N_c statistics, mean height, pressure drop."""
+    eng = sim.engine
+    nc = contact_numbers(eng)
+    out = {"mean_particle_height_m": sim.mean_height(), "multicontact_ratio": multicontact_ratio(nc),
+           "particles_in_contact": int(np.count_nonzero(nc >= 1))}
+    gas = getattr(sim, "gas", None)
+    if gas is not None:
+        grid = gas.grid
+        top = grid.y_centres[-1] + 0.5 * grid.dy
+        if PRESSURE_PROBE_HEIGHT < top:
+            out["pressure_drop_20cm_Pa"] = pressure_drop(grid, gas.state.p, PRESSURE_PROBE_HEIGHT)
+            # Hoomans 1996 Figs 11/13: the (gauge) pressure 20 cm above the central jet
+            width = grid.x_centres[-1] + 0.5 * grid.dx
+            out["pressure_20cm_gauge_Pa"] = (pressure_at(grid, gas.state.p, 0.5 * width, PRESSURE_PROBE_HEIGHT)
+                                             - sim.case.gas.properties.reference_pressure)
+        out["pressure_drop_bed_Pa"] = pressure_drop(grid, gas.state.p, top)
+    return out
+
+
+def cell_force_maps(grid, position, mass, contact, drag, gravity) -> dict[str, np.ndarray]:
+    """Cell maps (nx, ny) of mean |F_contact|/(m g), mean |F_drag|/(m g) and their ratio (Sun Figs 7/12).
+
+    Cells without particles are NaN; the ratio is −1 where the drag is zero (Sun's legend).
+    """
+    nx, ny = grid.shape
+    i = np.clip((position[:, 0] / grid.dx).astype(np.int64), 0, nx - 1)
+    j = np.clip((position[:, 1] / grid.dy).astype(np.int64), 0, ny - 1)
+    cell = i * ny + j
+    weight = mass * np.linalg.norm(gravity)
+    fc = np.linalg.norm(contact, axis=1) / weight
+    fd = np.linalg.norm(drag, axis=1) / weight
+    count = np.bincount(cell, minlength=nx * ny).reshape(nx, ny).astype(float)
+    sc = np.bincount(cell, weights=fc, minlength=nx * ny).reshape(nx, ny)
+    sd = np.bincount(cell, weights=fd, minlength=nx * ny).reshape(nx, ny)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mc = np.where(count > 0, sc / count, np.nan)
+        md = np.where(count > 0, sd / count, np.nan)
+        ratio = np.where(count > 0, np.where(sd > 0, sc / np.where(sd > 0, sd, 1.0), -1.0), np.nan)
+    return {"contact_force": mc, "drag_force": md, "force_ratio": ratio, "particles": count}
+
+
+def averaging_window(t_end: float, window=SUN_WINDOW) -> tuple[float, float]:
+    """Sun's 5–10 s window when the run reaches its end, else the second half of the run."""
+    if t_end >= window[1] - 1e-9:
+        return float(window[0]), float(window[1])
+    return 0.5 * t_end, t_end
+
+
+def dominant_frequency(t: np.ndarray, signal: np.ndarray) -> float:
+    """Frequency [Hz] of the largest peak of the power spectrum (mean removed); NaN if too short."""
+    t, s = np.asarray(t, float), np.asarray(signal, float)
+    ok = np.isfinite(s)
+    t, s = t[ok], s[ok]
+    if s.size < 8:
+        return math.nan
+    dt = float(np.median(np.diff(t)))
+    if dt <= 0:
+        return math.nan
+    # resample on a uniform grid (probe times are uniform up to round-off)
+    tu = np.arange(t[0], t[-1] + 0.5 * dt, dt)
+    su = np.interp(tu, t, s)
+    spec = np.abs(np.fft.rfft(su - su.mean())) ** 2
+    freq = np.fft.rfftfreq(su.size, dt)
+    if spec.size < 2:
+        return math.nan
+    k = 1 + int(np.argmax(spec[1:]))
+    return float(freq[k])
+
+
+AVERAGED = {  # probes.csv column → summary key of its time average
+    "mean_particle_height_m": "mean_particle_height_avg_m",
+    "coordination": "coordination_number_avg",
+    "multicontact_ratio": "multicontact_ratio_avg",
+    "pressure_drop_20cm_Pa": "pressure_drop_20cm_avg_Pa",
+    "pressure_drop_bed_Pa": "pressure_drop_bed_avg_Pa",
+}
+
+
+def time_averages(probes_csv: str | Path, t_end: float) -> dict:
+    """Summary entries: time averages of the bed probes and the pressure signal's dominant frequency."""
+    path = Path(probes_csv)
+    if not path.exists():
+        return {}
+    import csv
+
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    if not rows:
+        return {}
+    a, b = averaging_window(t_end)
+    t = np.array([float(r["time_s"]) for r in rows])
+    sel = (t >= a - 1e-9) & (t <= b + 1e-9)
+    out: dict = {"averages_window_s": [a, b], "averages_samples": int(sel.sum())}
+    for col, key in AVERAGED.items():
+        if col not in rows[0] or not sel.any():
+            continue
+        vals = np.array([float(r[col]) if r[col] not in ("", "nan") else math.nan for r in rows])[sel]
+        vals = vals[np.isfinite(vals)]
+        out[key] = float(vals.mean()) if vals.size else None
+    if "pressure_drop_20cm_Pa" in rows[0] and sel.sum() >= 8:
+        s = np.array([float(r["pressure_drop_20cm_Pa"]) for r in rows])[sel]
+        f = dominant_frequency(t[sel], s)
+        out["pressure_20cm_dominant_frequency_Hz"] = f if math.isfinite(f) else None
+    return out
+
+
+def wen_yu_umf(diameter: float, particle_density: float, gas_density: float, viscosity: float,
+               g: float = 9.81) -> float:
+    """Minimum fluidisation velocity [m/s] of Wen & Yu (1966): Re_mf = sqrt(33.7² + 0.0408 Ar) − 33.7."""
+    ar = gas_density * (particle_density - gas_density) * g * diameter**3 / viscosity**2
+    return (math.sqrt(33.7**2 + 0.0408 * ar) - 33.7) * viscosity / (gas_density * diameter)
+
+
+def minimum_fluidisation(superficial, pressure_drop_pa, weight_per_area: float, fixed_below: float = 0.8,
+                         fluidised_above: float = 1.3) -> dict:
+    """u_mf from a sweep of superficial velocity, as measured in the laboratory.
+
+    The samples are in sweep order (rising U). The fixed-bed branch (the samples before Δp
+    first reaches ``fixed_below`` W/A) is fitted by least squares
+    with Ergun's form Δp = a U + b U² (a, b ≥ 0); u_mf is where that curve reaches the bed weight over
+    area W/A. The plateau is the mean Δp over U > ``fluidised_above`` u_mf.
+    Returns ``umf``, ``plateau_Pa``, ``a``, ``b`` (NaN where the sweep lacks the points).
+    """
+    u = np.asarray(superficial, float)
+    dp = np.asarray(pressure_drop_pa, float)
+    # the fixed bed: the points of a rising sweep before Δp first reaches fixed_below W/A
+    over = np.flatnonzero(dp >= fixed_below * weight_per_area)
+    fixed = (np.arange(u.size) < (over[0] if over.size else u.size)) & (u > 0)
+    out = {"umf": math.nan, "plateau_Pa": math.nan, "a": math.nan, "b": math.nan}
+    if fixed.sum() < 3:
+        return out
+    from scipy.optimize import nnls
+
+    A = np.column_stack([u[fixed], u[fixed] ** 2])
+    (a, b), _ = nnls(A, dp[fixed])  # Ergun's coefficients are not negative
+    if b > 1e-12 * abs(a):
+        umf = (-a + math.sqrt(a * a + 4 * b * weight_per_area)) / (2 * b)
+    else:
+        umf = weight_per_area / a
+    out.update(umf=float(umf), a=float(a), b=float(b))
+    fluid = u > fluidised_above * umf
+    if fluid.any():
+        out["plateau_Pa"] = float(dp[fluid].mean())
+    return out

@@ -1,0 +1,291 @@
+"""Gas fields at cell centres in one HDF5 file, indexed by an XDMF file that ParaView opens.
+
+``GasFieldWriter`` is an observer of a coupled run: each time its schedule fires it appends
+one snapshot of the gas state to ``gas.h5`` and rewrites ``gas.xdmf`` atomically, listing
+only snapshots that were written completely, so the index is always valid. A run without
+gas (``sim.gas is None``) writes nothing. ``read_gas_fields`` reads a run's file back as
+NumPy arrays stacked over time.
+
+Layout of ``gas.h5`` (all float64, SI units)::
+
+    attrs      format = "fluidem-gas", version = 1, nx, ny, dx [m], dy [m], depth [m],
+               layout = "(ny, nx): row j is y, x varies fastest"
+    /grid      x_faces (nx+1,), y_faces (ny+1,), x_centres (nx,), y_centres (ny,) [m]
+    /snapshots/<6-digit index>   attrs time [s], step, complete (set last)
+        voidage          ε [-]
+        solids_fraction  1 − ε [-]
+        p                pressure [Pa]
+        rho              gas density [kg/m^3]
+        ux, uy           interstitial gas velocity at the centre [m/s]: the mean of the two faces
+        superficial_ux, superficial_uy   ε ux, ε uy [m/s]
+        solids_u, solids_v   cell-averaged solids velocity [m/s]   (when the coupling exposes it)
+        beta             interphase momentum-exchange coefficient β [kg m^-3 s^-1] of the last gas
+                         step (likewise; NaN before the first gas step)
+
+Every field is stored as ``(ny, nx)``: row ``j`` is the cell row at height
+``(j + 1/2) dy``, and x varies fastest. That is the order XDMF and VTK expect for cell
+data, so ParaView reads the datasets in place; ``read_gas_fields`` transposes back to the
+grid's ``(nx, ny)`` convention (``gas/grid.py``).
+
+``gas.xdmf`` is an XDMF 3 temporal collection of ``2DRectMesh`` grids with ``VXVY``
+geometry (the face coordinates in ``/grid``) and one ``Center="Cell"`` scalar attribute per
+dataset. ParaView's XDMF 3 readers (Xdmf3ReaderS/T) put it in the x–y plane with the
+particles of ``particles.xdmf``. Vectors for glyphs or streamlines: Calculator
+``ux*iHat + uy*jHat``.
+"""
+from __future__ import annotations
+
+import os
+import warnings
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from ..schedule import EveryTime
+from .atomic import write_text_atomic
+
+GAS_FILE = "gas.h5"
+GAS_INDEX = "gas.xdmf"
+FORMAT, VERSION = "fluidem-gas", 1
+
+# Fields every snapshot holds, then the ones written when the coupling exposes them.
+FIELDS = ("voidage", "solids_fraction", "p", "rho", "ux", "uy", "superficial_ux", "superficial_uy")
+OPTIONAL_FIELDS = ("solids_u", "solids_v", "beta")
+UNITS = {"voidage": "-", "solids_fraction": "-", "p": "Pa", "rho": "kg/m^3", "ux": "m/s", "uy": "m/s",
+         "superficial_ux": "m/s", "superficial_uy": "m/s", "solids_u": "m/s", "solids_v": "m/s",
+         "beta": "kg/(m^3 s)"}
+
+
+def cell_fields(state, last_map=None, last_beta=None) -> dict[str, np.ndarray]:
+    """Cell-centred fields of a ``GasState``, each (nx, ny) float64 (names and units: module docstring).
+
+    ``last_map`` is the coupling's last ``SolidsMap`` (``solids_u``, ``solids_v``) and
+    ``last_beta`` its last β per cell; either may be None and is then left out.
+    """
+    eps = np.asarray(state.voidage, float)
+    ux = 0.5 * (state.u[:-1, :] + state.u[1:, :])  # x-faces i and i+1 bound cell i (gas/grid.py)
+    uy = 0.5 * (state.v[:, :-1] + state.v[:, 1:])  # y-faces j and j+1 bound cell j
+    out = {
+        "voidage": eps,
+        "solids_fraction": 1.0 - eps,
+        "p": np.asarray(state.p, float),
+        "rho": np.asarray(state.rho, float),
+        "ux": ux,
+        "uy": uy,
+        "superficial_ux": eps * ux,
+        "superficial_uy": eps * uy,
+    }
+    if last_map is not None:
+        for name in ("solids_u", "solids_v"):
+            value = getattr(last_map, name, None)
+            if value is not None:
+                out[name] = np.asarray(value, float)
+    if last_beta is not None:
+        out["beta"] = np.asarray(last_beta, float)
+    return out
+
+
+def _coupling_fields(gas) -> dict[str, np.ndarray]:
+    """``cell_fields`` of a ``GasCoupling``; β is NaN (not left out) while a coupling that keeps
+    ``last_beta`` has none yet (before its first gas step), so every snapshot has the same fields."""
+    fields = cell_fields(gas.state, getattr(gas, "last_map", None), getattr(gas, "last_beta", None))
+    if "beta" not in fields and hasattr(gas, "last_beta"):
+        fields["beta"] = np.full(gas.grid.shape, np.nan)
+    return fields
+
+
+class GasFieldWriter:
+    """Observer writing the gas fields of a coupled run to ``gas.h5`` + ``gas.xdmf``.
+
+    Parameters
+    ----------
+    out_dir : the run directory.
+    schedule : ``Every``/``EveryTime``; the run's default is the particle snapshot interval.
+
+    A snapshot group gets ``complete = True`` only after all its datasets are written;
+    the index, the reader and ``truncate_after`` ignore or drop groups without it (a run
+    killed in the middle of a write).
+    """
+
+    def __init__(self, out_dir: Path, schedule=None):
+        self.path = Path(out_dir) / GAS_FILE
+        self.xdmf = Path(out_dir) / GAS_INDEX
+        self.schedule = schedule or EveryTime(0.01)
+
+    def __call__(self, sim) -> None:
+        gas = getattr(sim, "gas", None)
+        if gas is None:
+            return
+        grid = gas.grid
+        fields = _coupling_fields(gas)
+        for name, value in fields.items():
+            if value.shape != grid.shape:
+                raise ValueError(f"gas field {name!r} has shape {value.shape}; the grid's cells are {grid.shape}")
+        with h5py.File(self.path, "a") as f:
+            _write_grid(f, grid)
+            grp = f.require_group("snapshots")
+            keys = sorted(grp)
+            key = f"{int(keys[-1]) + 1 if keys else 0:06d}"
+            g = grp.create_group(key)
+            g.attrs["time"] = float(sim.time)
+            g.attrs["step"] = int(sim.step)
+            for name, value in fields.items():
+                d = g.create_dataset(name, data=np.ascontiguousarray(value.T))
+                d.attrs["units"] = UNITS[name]
+            f.flush()
+            g.attrs["complete"] = True
+            index = _index(f)
+        write_text_atomic(self.xdmf, xdmf_text(self.path.name, index, grid.nx, grid.ny))
+
+    def truncate_after(self, step: int) -> None:
+        """Drop snapshots later than ``step`` and incomplete ones (used on resume), then rewrite the index.
+
+        A ``gas.h5`` that HDF5 cannot open (a crash during a write) is kept as
+        ``gas.h5.unreadable`` and the run starts a new one, so the run stays resumable.
+        """
+        if not self.path.exists():
+            return
+        try:
+            with h5py.File(self.path, "a") as f:
+                grp = f.require_group("snapshots")
+                for k in list(grp):
+                    if not grp[k].attrs.get("complete", False) or int(grp[k].attrs["step"]) > step:
+                        del grp[k]
+                index = _index(f)
+                nx, ny = (int(f.attrs["nx"]), int(f.attrs["ny"])) if "nx" in f.attrs else (0, 0)
+        except (OSError, KeyError) as err:
+            aside = self.path.with_name(self.path.name + ".unreadable")
+            os.replace(self.path, aside)
+            warnings.warn(f"{self.path} could not be read on resume ({err}); moved to {aside.name}, "
+                          f"gas fields start again from this step", RuntimeWarning, stacklevel=2)
+            index, nx, ny = [], 0, 0
+        write_text_atomic(self.xdmf, xdmf_text(self.path.name, index, nx, ny))
+
+    def finalize(self, sim) -> None:
+        """Rewrite the index from the file. It is up to date after every snapshot already, so a file
+        that cannot be read now (the run is ending on an error) leaves the last index as it is."""
+        if not self.path.exists():
+            return
+        try:
+            with h5py.File(self.path, "r") as f:
+                index = _index(f)
+                nx, ny = int(f.attrs.get("nx", 0)), int(f.attrs.get("ny", 0))
+        except (OSError, KeyError):
+            return
+        write_text_atomic(self.xdmf, xdmf_text(self.path.name, index, nx, ny))
+
+
+def _write_grid(f: h5py.File, grid) -> None:
+    """File attributes and ``/grid`` on the first snapshot; later ones must have the same grid."""
+    if "grid" in f:
+        if (int(f.attrs["nx"]), int(f.attrs["ny"])) != tuple(grid.shape):
+            raise ValueError(f"{f.filename} holds a {f.attrs['nx']} x {f.attrs['ny']} grid; "
+                             f"this run's is {grid.nx} x {grid.ny}")
+        return
+    f.attrs.update(format=FORMAT, version=VERSION, nx=grid.nx, ny=grid.ny, dx=grid.dx, dy=grid.dy,
+                   depth=grid.depth, layout="(ny, nx): row j is y, x varies fastest")
+    g = f.create_group("grid")
+    g["x_faces"], g["y_faces"] = grid.x_faces, grid.y_faces
+    g["x_centres"], g["y_centres"] = grid.x_centres, grid.y_centres
+
+
+def _index(f: h5py.File) -> list[tuple[str, float, list[str]]]:
+    """(key, time, field names) of the complete snapshots, in order."""
+    grp = f.get("snapshots")
+    if grp is None:
+        return []
+    out = []
+    for k in sorted(grp):
+        g = grp[k]
+        if g.attrs.get("complete", False):
+            out.append((k, float(g.attrs["time"]), [n for n in FIELDS + OPTIONAL_FIELDS if n in g]))
+    return out
+
+
+def xdmf_text(h5name: str, index: list[tuple[str, float, list[str]]], nx: int, ny: int) -> str:
+    """XDMF 3 temporal collection of 2DRectMesh grids, one per snapshot in ``index``."""
+    grids = []
+    for key, t, names in index:
+        attrs = [
+            f'      <Attribute Name="{name}" AttributeType="Scalar" Center="Cell">\n'
+            f'        <DataItem Dimensions="{ny} {nx}" NumberType="Float" Precision="8" Format="HDF">'
+            f"{h5name}:/snapshots/{key}/{name}</DataItem>\n      </Attribute>"
+            for name in names
+        ]
+        grids.append(
+            f'    <Grid Name="gas_{key}" GridType="Uniform">\n'
+            f'      <Time Value="{t:.9g}"/>\n'
+            f'      <Topology TopologyType="2DRectMesh" Dimensions="{ny + 1} {nx + 1}"/>\n'
+            f'      <Geometry GeometryType="VXVY">\n'
+            f'        <DataItem Dimensions="{nx + 1}" NumberType="Float" Precision="8" Format="HDF">'
+            f"{h5name}:/grid/x_faces</DataItem>\n"
+            f'        <DataItem Dimensions="{ny + 1}" NumberType="Float" Precision="8" Format="HDF">'
+            f"{h5name}:/grid/y_faces</DataItem>\n      </Geometry>\n"
+            + "\n".join(attrs)
+            + "\n    </Grid>"
+        )
+    return (
+        '<?xml version="1.0" ?>\n<!DOCTYPE Xdmf SYSTEM "Xdmf.dtd" []>\n<Xdmf Version="3.0">\n  <Domain>\n'
+        '   <Grid Name="gas" GridType="Collection" CollectionType="Temporal">\n'
+        + "\n".join(grids)
+        + ("\n" if grids else "")
+        + "   </Grid>\n  </Domain>\n</Xdmf>\n"
+    )
+
+
+def read_gas_fields(run_dir: str | Path, fields=None) -> dict[str, np.ndarray]:
+    """The gas fields of a run, stacked over time.
+
+    Parameters
+    ----------
+    run_dir : a run directory (or the path of its ``gas.h5``).
+    fields : names to read (default all present); an unknown name raises ``KeyError``.
+
+    Returns
+    -------
+    dict with ``time`` (T,) [s], ``step`` (T,) int, ``x``/``y`` cell centres (nx,)/(ny,) [m],
+    ``x_faces``/``y_faces`` (nx+1,)/(ny+1,) [m], and each field as (T, nx, ny) float64
+    (``field[k, i, j]`` is cell (i, j) at ``time[k]``; NaN in a snapshot without it).
+    Only completely written snapshots are read. Raises ``FileNotFoundError`` without a file.
+
+    Examples
+    --------
+    >>> g = read_gas_fields("runs/jet")
+    >>> mean_solids = g["solids_fraction"][g["time"] >= 5.0].mean(axis=0)   # (nx, ny)
+    >>> import pandas as pd; pd.Series(g["p"][:, 7, 10], index=g["time"])    # one cell's pressure
+    """
+    path = Path(run_dir)
+    if path.is_dir():
+        path = path / GAS_FILE
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: no gas fields (runs with a gas phase write {GAS_FILE})")
+    with h5py.File(path, "r") as f:
+        if "grid" not in f:
+            raise KeyError(f"{path} has no /grid group; it is not a fluidem gas-field file")
+        gridg = f["grid"]
+        out: dict[str, np.ndarray] = {
+            "x": np.asarray(gridg["x_centres"]), "y": np.asarray(gridg["y_centres"]),
+            "x_faces": np.asarray(gridg["x_faces"]), "y_faces": np.asarray(gridg["y_faces"]),
+        }
+        nx, ny = len(out["x"]), len(out["y"])
+        index = _index(f)
+        present = [n for n in FIELDS + OPTIONAL_FIELDS if any(n in names for _, _, names in index)]
+        if fields is None:
+            names = present
+        else:
+            names = list(fields)
+            unknown = [n for n in names if n not in FIELDS + OPTIONAL_FIELDS]
+            if unknown:
+                raise KeyError(f"unknown gas field(s) {unknown}; the fields are {list(FIELDS + OPTIONAL_FIELDS)}")
+        grp = f["snapshots"] if index else None
+        out["time"] = np.array([t for _, t, _ in index], float)
+        out["step"] = np.array([int(grp[k].attrs["step"]) for k, _, _ in index], np.int64) if index \
+            else np.zeros(0, np.int64)
+        for name in names:
+            stack = np.full((len(index), nx, ny), np.nan)
+            for k, (key, _, have) in enumerate(index):
+                if name in have:
+                    stack[k] = np.asarray(grp[key][name]).T
+            out[name] = stack
+    return out

@@ -1,0 +1,118 @@
+"""Sun 2007 analyses (analysis/fluidised.py) on hand-made data with known answers."""
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from fluidem.analysis import fluidised as F
+from fluidem.gas.grid import StaggeredGrid
+
+
+def grid(nx=3, ny=10, w=0.15, h=0.5):
+    return StaggeredGrid(cells=(nx, ny), size=(w, h), depth=0.004)
+
+
+def test_pressure_drop_of_a_linear_profile_is_exact():
+    """p = p0 − a y (plus a lateral variation that averages out): Δp(0 → 0.2) = 0.2 a, even below the first centre."""
+    g = grid()
+    x, y = np.meshgrid(g.x_centres, g.y_centres, indexing="ij")
+    a = 1234.5
+    p = 101325.0 - a * y + 7.0 * (x - x.mean())
+    assert F.pressure_drop(g, p, 0.2) == pytest.approx(0.2 * a, rel=1e-12)
+    top = g.y_centres[-1] + 0.5 * g.dy  # extrapolated above the last centre
+    assert F.pressure_drop(g, p, top) == pytest.approx(top * a, rel=1e-12)
+
+
+def test_pressure_at_a_point_is_bilinear_and_exact_for_a_plane():
+    g = grid()
+    x, y = np.meshgrid(g.x_centres, g.y_centres, indexing="ij")
+    p = 100.0 + 3.0 * x - 50.0 * y
+    assert F.pressure_at(g, p, 0.075, 0.2) == pytest.approx(100.0 + 3.0 * 0.075 - 50.0 * 0.2, rel=1e-12)
+
+
+def test_multicontact_ratio_counts_particles_not_contacts():
+    nc = np.array([0, 1, 1, 2, 3, 0])
+    assert F.multicontact_ratio(nc) == pytest.approx(2 / 4)
+    assert math.isnan(F.multicontact_ratio(np.zeros(5, int)))
+
+
+def test_contact_numbers_of_a_chain():
+    """Three spheres in a touching row and one apart: N_c = 1, 2, 1, 0."""
+    from fluidem.particles._neighbours_kernels import build_pairs
+
+    d = 1e-3
+    pos = np.array([[0, 0, 0], [0.999 * d, 0, 0], [1.998 * d, 0, 0], [5 * d, 0, 0]], float)
+    r = np.full(4, d / 2)
+    rs, partner, _, _ = build_pairs(pos, r, 0.1 * d, False)
+    eng = SimpleNamespace(state=SimpleNamespace(position=pos, radius=r, n=4), row_start=rs, partner=partner)
+    assert F.contact_numbers(eng).tolist() == [1, 2, 1, 0]
+
+
+def test_cell_force_maps_means_ratio_and_empty_cells():
+    g = grid(nx=2, ny=2, w=0.2, h=0.2)  # cells of 0.1 m
+    pos = np.array([[0.05, 0.05, 0], [0.06, 0.04, 0], [0.15, 0.05, 0]])
+    m = np.array([1.0, 2.0, 1.0])
+    grav = np.array([0.0, -10.0, 0.0])
+    contact = np.array([[30.0, 40.0, 0], [0, 40.0, 0], [5.0, 0, 0]])  # |F|/mg = 5, 2, 0.5
+    drag = np.array([[0, 10.0, 0], [0, 20.0, 0], [0, 0, 0]])  # 1, 1, 0
+    out = F.cell_force_maps(g, pos, m, contact, drag, grav)
+    assert out["contact_force"][0, 0] == pytest.approx(3.5)
+    assert out["drag_force"][0, 0] == pytest.approx(1.0)
+    assert out["force_ratio"][0, 0] == pytest.approx(3.5)
+    assert out["force_ratio"][1, 0] == -1.0  # drag zero there (Sun's legend)
+    assert np.isnan(out["contact_force"][0, 1]) and np.isnan(out["force_ratio"][1, 1])
+    assert out["particles"].sum() == 3
+
+
+def test_dominant_frequency_of_a_noisy_sine():
+    rng = np.random.default_rng(0)
+    t = np.arange(0.0, 5.0, 0.01)
+    s = 300.0 + 50.0 * np.sin(2 * np.pi * 2.6 * t) + 5.0 * rng.standard_normal(t.size)
+    # resolution 1/5 s = 0.2 Hz: the peak bin is the one nearest 2.6 Hz
+    assert F.dominant_frequency(t, s) == pytest.approx(2.6, abs=0.1)
+    assert math.isnan(F.dominant_frequency(t[:4], s[:4]))
+
+
+def test_averaging_window_is_sun_5_to_10_s_or_the_second_half():
+    assert F.averaging_window(20.0) == (5.0, 10.0)
+    assert F.averaging_window(10.0) == (5.0, 10.0)
+    assert F.averaging_window(2.0) == (1.0, 2.0)
+
+
+def test_time_averages_from_probes_csv(tmp_path):
+    t = np.arange(0.0, 12.0 + 1e-9, 0.01)
+    h = np.where((t >= 5.0) & (t <= 10.0), 0.09, 0.5)  # only the window's value may enter the mean
+    p = 1000.0 + 100.0 * np.sin(2 * np.pi * 3.0 * t)
+    lines = ["time_s,step,mean_particle_height_m,coordination,multicontact_ratio,pressure_drop_20cm_Pa"]
+    lines += [f"{a:.10g},{k},{b:.10g},0.5,nan,{c:.10g}" for k, (a, b, c) in enumerate(zip(t, h, p))]
+    (tmp_path / "probes.csv").write_text("\n".join(lines) + "\n")
+    out = F.time_averages(tmp_path / "probes.csv", 12.0)
+    assert out["averages_window_s"] == [5.0, 10.0]
+    assert out["averages_samples"] == 501
+    assert out["mean_particle_height_avg_m"] == pytest.approx(0.09)
+    assert out["coordination_number_avg"] == pytest.approx(0.5)
+    assert out["multicontact_ratio_avg"] is None  # only NaN samples
+    assert out["pressure_drop_20cm_avg_Pa"] == pytest.approx(1000.0, abs=0.5)
+    assert out["pressure_20cm_dominant_frequency_Hz"] == pytest.approx(3.0, abs=0.2)
+    assert F.time_averages(tmp_path / "missing.csv", 1.0) == {}
+
+
+def test_minimum_fluidisation_recovers_ergun_umf_from_a_synthetic_sweep():
+    """Δp = a U + b U² up to W/A, then W/A with noise: the fit meets W/A at the exact root."""
+    a, b, w = 600.0, 120.0, 128.0
+    umf = (-a + math.sqrt(a * a + 4 * b * w)) / (2 * b)
+    u = np.linspace(0.0, 0.5, 201)
+    rng = np.random.default_rng(1)
+    dp = np.where(u < umf, a * u + b * u**2, w + 5.0 * rng.standard_normal(u.size))
+    out = F.minimum_fluidisation(u, dp, w)
+    assert out["umf"] == pytest.approx(umf, rel=1e-9)
+    assert out["a"] == pytest.approx(a, rel=1e-9) and out["b"] == pytest.approx(b, rel=1e-6)
+    assert out["plateau_Pa"] == pytest.approx(w, abs=1.5)
+
+
+def test_wen_yu_of_glass_in_air():
+    """0.5 mm glass (2500 kg/m³) in air: Ar = 11354, Re_mf = 6.29, u_mf = 0.1885 m/s (hand calculation)."""
+    assert F.wen_yu_umf(0.5e-3, 2500.0, 1.2, 1.8e-5) == pytest.approx(0.18852, rel=1e-4)

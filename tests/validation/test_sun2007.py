@@ -1,0 +1,72 @@
+"""Validation: the two soft-sphere fluidised beds of Sun, Battaglia & Subramaniam 2007.
+
+Each built-in case runs 10 s (the end of Sun's 5–10 s averaging window) and the tests
+read the time averages that ``summary.json`` reports over 5–10 s.
+
+Published (Sun 2007 §4):
+- uniform inflow (``goldschmidt``): mean particle height 8.9 cm (TF-DEM), 9.16 cm (TFM),
+  11.4 cm (experiment of Goldschmidt et al.); bulk coordination number "around 0.5"
+  (Fig 5); multicontact ratio "fluctuating around 0.3" (Fig 11).
+- central jet (``tsuji-jet``): coordination number "around 1.2" (Fig 5); multicontact
+  ratio above 0.6 most of the time (Fig 11); the pressure drop 20 cm above the inlet
+  fluctuates (Fig 3) — its dominant frequency is reported, not asserted.
+
+Bands: the mean height must fall between Sun's TF-DEM value minus 15 % and the
+experiment plus 15 % (the three published numbers span 8.9–11.4 cm). "Around" values are
+read as ±50 %. What this model gave last (recorded in the issue notes):
+goldschmidt 9.30 cm, coordination 0.34; tsuji-jet coordination 0.60 (5–10 s), below
+Sun's 1.2 — the strict xfail below keeps that disagreement visible.
+Each run takes 10–25 minutes on this 2-core machine.
+"""
+import json
+
+import pytest
+
+from fluidem.cli import main
+
+pytestmark = pytest.mark.validation
+
+
+def run_case(tmp_path_factory, name):
+    out = tmp_path_factory.mktemp(name) / "run"
+    assert main(["run", name, "--until", "10", "--out", str(out), "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    print(f"\n{name}: " + json.dumps({k: v for k, v in summary.items() if k.endswith(("_avg_m", "_avg", "_Hz",
+                                                                                      "_avg_Pa"))}))
+    return summary
+
+
+@pytest.fixture(scope="module")
+def goldschmidt(tmp_path_factory):
+    return run_case(tmp_path_factory, "goldschmidt")
+
+
+@pytest.fixture(scope="module")
+def tsuji(tmp_path_factory):
+    return run_case(tmp_path_factory, "tsuji-jet")
+
+
+def test_goldschmidt_averages_over_sun_window(goldschmidt):
+    assert goldschmidt["averages_window_s"] == [5.0, 10.0]
+    assert goldschmidt["averages_samples"] > 100
+
+
+def test_goldschmidt_mean_particle_height(goldschmidt):
+    h = goldschmidt["mean_particle_height_avg_m"]
+    assert 0.85 * 0.089 <= h <= 1.15 * 0.114, f"mean particle height {h * 100:.2f} cm"
+
+
+def test_goldschmidt_coordination_and_multicontacts(goldschmidt):
+    assert 0.25 <= goldschmidt["coordination_number_avg"] <= 0.75
+    assert 0.15 <= goldschmidt["multicontact_ratio_avg"] <= 0.45
+
+
+def test_tsuji_jet_pressure_signal_is_reported(tsuji):
+    assert tsuji["pressure_drop_20cm_avg_Pa"] > 0.0
+    assert tsuji["pressure_20cm_dominant_frequency_Hz"] is not None
+
+
+@pytest.mark.xfail(strict=True, reason="tsuji-jet coordination 0.60 (5-10 s) against Sun's ~1.2")
+def test_tsuji_jet_coordination_and_multicontacts(tsuji):
+    assert 0.6 <= tsuji["coordination_number_avg"] <= 1.8
+    assert tsuji["multicontact_ratio_avg"] > 0.6

@@ -116,3 +116,19 @@ def test_minimum_fluidisation_recovers_ergun_umf_from_a_synthetic_sweep():
 def test_wen_yu_of_glass_in_air():
     """0.5 mm glass (2500 kg/m³) in air: Ar = 11354, Re_mf = 6.29, u_mf = 0.1885 m/s (hand calculation)."""
     assert F.wen_yu_umf(0.5e-3, 2500.0, 1.2, 1.8e-5) == pytest.approx(0.18852, rel=1e-4)
+
+
+def test_bubble_is_an_enclosed_void_region_of_at_least_three_cells():
+    g = grid(nx=6, ny=10, w=0.06, h=0.1)  # 1 cm cells
+    eps = np.full(g.shape, 0.45)
+    eps[:, 7:] = 1.0  # freeboard: connected to the top row, never a bubble
+    assert F.bubble_area(g, eps) == 0.0
+    eps[2:4, 2:4] = 0.9  # a 2 × 2 enclosed void
+    assert F.bubble_area(g, eps) == pytest.approx(4e-4)
+    eps[2:4, 4:7] = 0.9  # now it erupts into the freeboard
+    assert F.bubble_area(g, eps) == 0.0
+    eps = np.full(g.shape, 0.45)
+    eps[3, 0:2] = 0.95  # a jet channel of two cells at the orifice
+    assert F.bubble_area(g, eps) == 0.0
+    eps[0:6, 3:5] = 0.9  # a slug: spans the width, particles above it
+    assert F.bubble_area(g, eps) == pytest.approx(12e-4)

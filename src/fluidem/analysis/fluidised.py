@@ -14,6 +14,9 @@ Definitions (Sun 2007, §4):
   inlet) between cell-centre rows.
 - pressure 20 cm above the jet (Hoomans 1996 Figs 11/13): the gauge pressure (relative to
   the reference pressure) at mid-width, bilinear between cell centres.
+- bubble (Hoomans 1996 §5.3, issue 5): the largest 4-connected region of cells with
+  ε > 0.8 not connected to the freeboard, at least 3 cells; ``bubble_detected`` in the
+  summary says whether one formed at any probe time.
 - mean particle height (Fig 9): the arithmetic mean of the particle centres' heights
   above the floor.
 
@@ -96,6 +99,29 @@ def pressure_at(grid, p: np.ndarray, x: float, y: float) -> float:
     return float((1 - a) * (1 - b) * p[i, j] + a * (1 - b) * p[i1, j] + (1 - a) * b * p[i, j1] + a * b * p[i1, j1])
 
 
+BUBBLE_VOIDAGE = 0.8  # a bubble cell has ε above this (issue 5; Hoomans 1996 Figs 10/12 by eye)
+BUBBLE_MIN_CELLS = 3  # smaller void regions (the jet channel at an orifice) are not bubbles
+
+
+def bubble_area(grid, voidage: np.ndarray, threshold: float = BUBBLE_VOIDAGE) -> float:
+    """Area [m²] of the largest bubble: a 4-connected region of cells with ε > ``threshold`` that is
+    not connected to the top row (the freeboard), so a void enclosed by particles, slugs included.
+    Regions of fewer than ``BUBBLE_MIN_CELLS`` cells count as no bubble (0)."""
+    from scipy import ndimage
+
+    void = np.asarray(voidage) > threshold
+    labels, n = ndimage.label(void)
+    if n == 0:
+        return 0.0
+    free = set(np.unique(labels[:, -1])) - {0}
+    sizes = np.bincount(labels.ravel(), minlength=n + 1)
+    sizes[0] = 0
+    for k in free:
+        sizes[k] = 0
+    best = int(sizes.max())
+    return float(best * grid.dx * grid.dy) if best >= BUBBLE_MIN_CELLS else 0.0
+
+
 def bed_probes(sim) -> dict[str, float]:
     """probes.csv columns of a fluidised bed: N_c statistics, mean height, pressure drop."""
     eng = sim.engine
@@ -113,6 +139,7 @@ def bed_probes(sim) -> dict[str, float]:
             out["pressure_20cm_gauge_Pa"] = (pressure_at(grid, gas.state.p, 0.5 * width, PRESSURE_PROBE_HEIGHT)
                                              - sim.case.gas.properties.reference_pressure)
         out["pressure_drop_bed_Pa"] = pressure_drop(grid, gas.state.p, top)
+        out["bubble_area_m2"] = bubble_area(grid, gas.state.voidage)
     return out
 
 
@@ -196,6 +223,10 @@ def time_averages(probes_csv: str | Path, t_end: float) -> dict:
         vals = np.array([float(r[col]) if r[col] not in ("", "nan") else math.nan for r in rows])[sel]
         vals = vals[np.isfinite(vals)]
         out[key] = float(vals.mean()) if vals.size else None
+    if "bubble_area_m2" in rows[0]:  # over the whole run: does a bubble ever form?
+        areas = np.array([float(r["bubble_area_m2"]) for r in rows])
+        out["bubble_max_area_m2"] = float(areas.max())
+        out["bubble_detected"] = bool(areas.max() > 0.0)
     if "pressure_drop_20cm_Pa" in rows[0] and sel.sum() >= 8:
         s = np.array([float(r["pressure_drop_20cm_Pa"]) for r in rows])[sel]
         f = dominant_frequency(t[sel], s)

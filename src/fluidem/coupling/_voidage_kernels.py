@@ -1,6 +1,12 @@
-"""Compiled kernels of the particle → grid mapping (``voidage.py``): deposits, exact disc–cell areas, diffusion."""
+"""Compiled kernels of the particle → grid mapping (``voidage.py``): deposits, exact disc–cell areas, diffusion.
+
+``map_solids`` is the whole mapping in one call (deposit, smoothing, eq. 49, clipping, averages).
+Method codes are the indices in ``voidage.METHODS`` (0 centroid, 1 area, 2 area_volume) and
+weighting codes those in ``voidage.WEIGHTINGS`` (0 number, 1 volume).
+"""
 import math
 
+import numpy as np
 from numba import njit
 
 
@@ -48,6 +54,23 @@ def disc_rect_area(cx, cy, r, x0, x1, y0, y1):
     Integrates min(y1, h) − max(y0, −h), h = sqrt(r² − x²), between the points where the
     disc's edge crosses y0 or y1; on each piece both bounds are a constant or ±h.
     """
+    return disc_rect_area_into(cx, cy, r, x0, x1, y0, y1, np.empty(6))
+
+
+@njit(cache=True, inline="always")
+def _insert(pts, n, x):
+    """Insert x into the ascending pts[:n]; returns n + 1."""
+    k = n
+    while k > 0 and pts[k - 1] > x:
+        pts[k] = pts[k - 1]
+        k -= 1
+    pts[k] = x
+    return n + 1
+
+
+@njit(cache=True)
+def disc_rect_area_into(cx, cy, r, x0, x1, y0, y1, pts):
+    """``disc_rect_area`` with a scratch array ``pts`` (≥ 6 float64) for the sorted break points."""
     a = max(x0 - cx, -r)
     b = min(x1 - cx, r)
     if a >= b:
@@ -56,17 +79,18 @@ def disc_rect_area(cx, cy, r, x0, x1, y0, y1):
     hi = y1 - cy
     if lo >= r or hi <= -r:
         return 0.0
-    pts = [a, b]
+    pts[0] = a
+    pts[1] = b
+    n = 2
     for yc in (lo, hi):
         if -r < yc < r:
             xc = math.sqrt(r * r - yc * yc)
             if a < xc < b:
-                pts.append(xc)
+                n = _insert(pts, n, xc)
             if a < -xc < b:
-                pts.append(-xc)
-    pts.sort()
+                n = _insert(pts, n, -xc)
     area = 0.0
-    for k in range(len(pts) - 1):
+    for k in range(n - 1):
         s0 = pts[k]
         s1 = pts[k + 1]
         if s1 <= s0:
@@ -94,6 +118,7 @@ def area_deposit(px, py, radius, scale, vx, vy, dx, dy, out, out_vx, out_vy):
     (Hoomans 1996 §3.4, multiple-cell overlap). Parts of a disc outside the grid are dropped.
     """
     nx, ny = out.shape
+    pts = np.empty(6)
     for p in range(px.size):
         r = radius[p]
         i0 = max(int(math.floor((px[p] - r) / dx)), 0)
@@ -102,7 +127,7 @@ def area_deposit(px, py, radius, scale, vx, vy, dx, dy, out, out_vx, out_vy):
         j1 = min(int(math.floor((py[p] + r) / dy)), ny - 1)
         for i in range(i0, i1 + 1):
             for j in range(j0, j1 + 1):
-                a = disc_rect_area(px[p], py[p], r, i * dx, (i + 1) * dx, j * dy, (j + 1) * dy)
+                a = disc_rect_area_into(px[p], py[p], r, i * dx, (i + 1) * dx, j * dy, (j + 1) * dy, pts)
                 if a > 0.0:
                     w = scale[p] * a
                     out[i, j] += w
@@ -135,3 +160,96 @@ def diffuse(field, rx, ry, steps, work):
         for i in range(nx):
             for j in range(ny):
                 field[i, j] = work[i, j]
+
+
+@njit(cache=True)
+def deposit_solids(method, weighting, position, radius, volume, velocity, dx, dy, norm, frac, wsum, wvx, wvy):
+    """Solids fraction ``frac`` (unsmoothed) and the velocity weights ``wsum``, ``wvx``, ``wvy`` of each cell.
+
+    method 0 (centroid): V_p into the cell of the centre (Sun 2007 eq. 34); 1 (area): the exact
+    disc area A_pij into every cell it overlaps; 2 (area_volume): V_p A_pij/(π r²). ``frac`` is
+    the deposit over ``norm`` (V_cell, or dx dy for area). weighting 0 (number): wsum counts
+    centres, wvx, wvy sum their velocities (Hoomans 1996 eq. 50); 1 (volume): wsum is the
+    deposit and wvx, wvy the deposit-weighted velocities (Sun 2007 eq. 35).
+    position, velocity : (N, ≥2); radius, volume : (N,); the rest (nx, ny), overwritten.
+    """
+    nx, ny = frac.shape
+    frac[:, :] = 0.0
+    wvx[:, :] = 0.0
+    wvy[:, :] = 0.0
+    n = position.shape[0]
+    px = position[:, 0]
+    py = position[:, 1]
+    vx = velocity[:, 0]
+    vy = velocity[:, 1]
+    if method == 0 and weighting == 0:  # both deposits in one pass
+        wsum[:, :] = 0.0
+        for p in range(n):
+            i = cell_index(px[p], 1.0 / dx, nx)
+            j = cell_index(py[p], 1.0 / dy, ny)
+            frac[i, j] += volume[p]  # Sun 2007 eq. 34
+            wsum[i, j] += 1.0  # Hoomans 1996 eq. 50
+            wvx[i, j] += vx[p]
+            wvy[i, j] += vy[p]
+        for i in range(nx):
+            for j in range(ny):
+                frac[i, j] /= norm
+        return
+    if method == 0:
+        centroid_deposit(px, py, volume, vx, vy, 1.0 / dx, 1.0 / dy, frac, wvx, wvy)  # Sun 2007 eq. 34
+    else:
+        scale = np.empty(n)
+        for p in range(n):
+            r = radius[p]
+            scale[p] = 1.0 if method == 1 else volume[p] / (math.pi * r * r)
+        area_deposit(px, py, radius, scale, vx, vy, dx, dy, frac, wvx, wvy)  # Hoomans 1996 §3.4
+    for i in range(nx):
+        for j in range(ny):
+            wsum[i, j] = frac[i, j]
+            frac[i, j] /= norm
+    if weighting == 0:  # Hoomans 1996 eq. 50: by centres, each particle counts once
+        wsum[:, :] = 0.0
+        wvx[:, :] = 0.0
+        wvy[:, :] = 0.0
+        centroid_deposit(px, py, np.ones(n), vx, vy, 1.0 / dx, 1.0 / dy, wsum, wvx, wvy)
+
+
+@njit(cache=True)
+def map_solids(method, weighting, position, radius, volume, velocity, dx, dy, norm, rx, ry, steps, to_3d,
+               eq49_factor, min_voidage, voidage, solids_u, solids_v):
+    """The particle → grid map of ``VoidageMapping.map``; returns the number of clipped cells.
+
+    ``deposit_solids``; then ``steps`` diffusion steps of the fraction (``diffuse(rx, ry)``; 0: none);
+    ε = 1 − fraction, with ``to_3d`` ε = 1 − eq49_factor max(1 − ε, 0)^{3/2} (Hoomans 1996 eq. 49);
+    ε < min_voidage raised to it and counted; solids velocity wv/wsum, 0 where wsum = 0.
+    voidage, solids_u, solids_v : (nx, ny) outputs.
+    """
+    nx, ny = voidage.shape
+    frac = np.empty((nx, ny))
+    wsum = np.empty((nx, ny))
+    wvx = np.empty((nx, ny))
+    wvy = np.empty((nx, ny))
+    deposit_solids(method, weighting, position, radius, volume, velocity, dx, dy, norm, frac, wsum, wvx, wvy)
+    if steps > 0:
+        diffuse(frac, rx, ry, steps, np.empty((nx, ny)))
+    clipped = 0
+    for i in range(nx):
+        for j in range(ny):
+            e = 1.0 - frac[i, j]
+            if to_3d:
+                s = 1.0 - e
+                if s < 0.0:
+                    s = 0.0
+                e = 1.0 - eq49_factor * s ** 1.5  # Hoomans 1996 eq. 49
+            if e < min_voidage:
+                e = min_voidage
+                clipped += 1
+            voidage[i, j] = e
+            w = wsum[i, j]
+            if w > 0.0:
+                solids_u[i, j] = wvx[i, j] / w
+                solids_v[i, j] = wvy[i, j] / w
+            else:
+                solids_u[i, j] = 0.0
+                solids_v[i, j] = 0.0
+    return clipped

@@ -39,50 +39,46 @@ EQ49_FACTOR = 2.0 / math.sqrt(math.pi * math.sqrt(3.0))  # Hoomans 1996 eq. 49
 
 
 def _particles(position, diameter):
+    """(position (N, 2|3) float64, diameter (N,) float64), checked."""
     pos = np.asarray(position, float)
     if pos.ndim != 2 or pos.shape[1] not in (2, 3):
         raise ValueError(f"position must be (N, 3) or (N, 2) [m]; got shape {pos.shape}")
-    d = np.broadcast_to(np.asarray(diameter, float), (pos.shape[0],))
+    d = np.ascontiguousarray(np.broadcast_to(np.asarray(diameter, float), (pos.shape[0],)))
     if np.any(~(d > 0.0)):
         raise ValueError("diameter must be > 0 [m] for every particle")
-    return np.ascontiguousarray(pos[:, 0]), np.ascontiguousarray(pos[:, 1]), np.ascontiguousarray(d)
+    return pos, d
 
 
 def _velocities(velocity, n):
+    """velocity (N, 2|3) float64; zeros (N, 2) for None."""
     if velocity is None:
-        z = np.zeros(n)
-        return z, z
+        return np.zeros((n, 2))
     vel = np.asarray(velocity, float)
-    if vel.shape[:1] != (n,) or vel.ndim != 2:
+    if vel.shape[:1] != (n,) or vel.ndim != 2 or vel.shape[1] < 2:
         raise ValueError(f"velocity must be (N, 3) or (N, 2) [m/s] with N = {n}; got shape {vel.shape}")
-    return np.ascontiguousarray(vel[:, 0]), np.ascontiguousarray(vel[:, 1])
+    return vel
 
 
-def _deposit(grid, px, py, d, method, vx, vy, weighting):
-    """(fraction, weight sum, weighted vx, weighted vy), each (nx, ny)."""
-    frac = np.zeros(grid.shape)
-    wvx = np.zeros(grid.shape)
-    wvy = np.zeros(grid.shape)
+def _codes(method, weighting):
     if method not in METHODS:
         raise ValueError(f"method = {method!r}: allowed are {', '.join(METHODS)}")
-    volume = math.pi / 6.0 * d**3
-    if method == "centroid":
-        K.centroid_deposit(px, py, volume, vx, vy, 1.0 / grid.dx, 1.0 / grid.dy, frac, wvx, wvy)  # Sun 2007 eq. 34
-        wsum = frac.copy()
-        frac /= grid.cell_volume
-    else:
-        r = 0.5 * d
-        scale = np.ones_like(d) if method == "area" else volume / (math.pi * r * r)
-        K.area_deposit(px, py, r, scale, vx, vy, grid.dx, grid.dy, frac, wvx, wvy)  # Hoomans 1996 §3.4
-        wsum = frac.copy()
-        frac /= (grid.dx * grid.dy) if method == "area" else grid.cell_volume
-    if weighting == "number":  # Hoomans 1996 eq. 50: by centres, each particle counts once
-        wsum = np.zeros(grid.shape)
-        wvx = np.zeros(grid.shape)
-        wvy = np.zeros(grid.shape)
-        K.centroid_deposit(px, py, np.ones_like(d), vx, vy, 1.0 / grid.dx, 1.0 / grid.dy, wsum, wvx, wvy)
-    elif weighting != "volume":
+    if weighting not in WEIGHTINGS:
         raise ValueError(f"weighting = {weighting!r}: allowed are {', '.join(WEIGHTINGS)}")
+    return METHODS.index(method), WEIGHTINGS.index(weighting)
+
+
+def _norm(grid, method):
+    """What the deposit is divided by: dx dy for the 2D area fraction, else V_cell."""
+    return grid.dx * grid.dy if method == "area" else grid.cell_volume
+
+
+def _deposit(grid, pos, d, method, vel, weighting):
+    """(fraction, weight sum, weighted vx, weighted vy), each (nx, ny); ``_voidage_kernels.deposit_solids``."""
+    mcode, wcode = _codes(method, weighting)
+    frac, wsum, wvx, wvy = (np.empty(grid.shape) for _ in range(4))
+    volume = math.pi / 6.0 * d**3
+    K.deposit_solids(mcode, wcode, pos, 0.5 * d, volume, vel, grid.dx, grid.dy, _norm(grid, method),
+                     frac, wsum, wvx, wvy)
     return frac, wsum, wvx, wvy
 
 
@@ -91,9 +87,8 @@ def solids_fraction(grid: StaggeredGrid, position, diameter, method: str = "cent
 
     position : (N, 3) [m] (x, y used); diameter : (N,) or scalar [m].
     """
-    px, py, d = _particles(position, diameter)
-    z = np.zeros(px.size)
-    return _deposit(grid, px, py, d, method, z, z, "volume")[0]
+    pos, d = _particles(position, diameter)
+    return _deposit(grid, pos, d, method, _velocities(None, d.size), "volume")[0]
 
 
 def solids_velocity(grid: StaggeredGrid, position, diameter, velocity, weighting: str = "number",
@@ -104,9 +99,8 @@ def solids_velocity(grid: StaggeredGrid, position, diameter, velocity, weighting
     ``weighting="volume"``: Σ v_k w_k / Σ w_k with w_k the particle's solids share in the cell
     under ``method`` (V_p for centroid counting: Sun 2007 eq. 35).
     """
-    px, py, d = _particles(position, diameter)
-    vx, vy = _velocities(velocity, px.size)
-    _, wsum, wvx, wvy = _deposit(grid, px, py, d, method, vx, vy, weighting)
+    pos, d = _particles(position, diameter)
+    _, wsum, wvx, wvy = _deposit(grid, pos, d, method, _velocities(velocity, d.size), weighting)
     return _average(wsum, wvx, wvy)
 
 
@@ -134,12 +128,18 @@ def smooth(grid: StaggeredGrid, field, width: float) -> np.ndarray:
         raise ValueError(f"smoothing width = {width!r}: must be >= 0 [m]")
     if width == 0.0:
         return f
+    rx, ry, steps = _diffusion_steps(grid, width)
+    K.diffuse(f, rx, ry, steps, np.empty_like(f))
+    return f
+
+
+def _diffusion_steps(grid: StaggeredGrid, width: float) -> tuple[float, float, int]:
+    """(rx, ry, steps) of ``smooth`` for a width [m] > 0: D t = width²/2 in steps with rx + ry ≤ 0.4."""
     total = 0.5 * width * width  # D t
     k = 1.0 / grid.dx**2 + 1.0 / grid.dy**2
     steps = max(1, math.ceil(total * k / 0.4))  # rx + ry ≤ 0.4 < 1/2: stable
     ddt = total / steps
-    K.diffuse(f, ddt / grid.dx**2, ddt / grid.dy**2, steps, np.empty_like(f))
-    return f
+    return ddt / grid.dx**2, ddt / grid.dy**2, steps
 
 
 def clip_voidage(voidage, minimum: float) -> tuple[np.ndarray, int]:
@@ -181,17 +181,28 @@ class VoidageMapping(BaseModel):
     velocity_weighting: Literal["number", "volume"] = "number"
     minimum_voidage: float = Field(0.3, gt=0.0, lt=1.0)
 
-    def map(self, grid: StaggeredGrid, position, diameter, velocity=None) -> SolidsMap:
+    def _check(self) -> None:
         if self.to_3d and self.method != "area":
             raise ValueError(f"to_3d (Hoomans 1996 eq. 49) converts 2D area voidage; method is {self.method!r}")
-        px, py, d = _particles(position, diameter)
-        vx, vy = _velocities(velocity, px.size)
-        frac, wsum, wvx, wvy = _deposit(grid, px, py, d, self.method, vx, vy, self.velocity_weighting)
-        if self.smoothing_width > 0.0:
-            frac = smooth(grid, frac, self.smoothing_width)
-        eps = 1.0 - frac
-        if self.to_3d:
-            eps = voidage_3d_from_2d(eps)
-        eps, clipped = clip_voidage(eps, self.minimum_voidage)
-        su, sv = _average(wsum, wvx, wvy)
-        return SolidsMap(eps, su, sv, clipped)
+
+    def map(self, grid: StaggeredGrid, position, diameter, velocity=None) -> SolidsMap:
+        """Voidage and solids velocity of particles at ``position`` (N, 3|2) [m] with ``diameter`` (N,) or
+        scalar [m] and ``velocity`` (N, 3|2) [m/s] (None: at rest)."""
+        self._check()
+        pos, d = _particles(position, diameter)
+        return self.map_particles(grid, pos, 0.5 * d, math.pi / 6.0 * d**3, _velocities(velocity, d.size))
+
+    def map_particles(self, grid: StaggeredGrid, position, radius, volume, velocity) -> SolidsMap:
+        """``map`` without argument checks, for a coupled run's every gas step.
+
+        position, velocity : (N, ≥2) float64 [m], [m/s]; radius (N,) [m] > 0 and volume (N,) = π/6 (2r)³ [m³].
+        One compiled call (``_voidage_kernels.map_solids``).
+        """
+        self._check()
+        mcode, wcode = _codes(self.method, self.velocity_weighting)
+        rx, ry, steps = _diffusion_steps(grid, self.smoothing_width) if self.smoothing_width > 0.0 else (0.0, 0.0, 0)
+        eps, su, sv = (np.empty(grid.shape) for _ in range(3))
+        clipped = K.map_solids(mcode, wcode, position, radius, volume, velocity, grid.dx, grid.dy,
+                               _norm(grid, self.method), rx, ry, steps, self.to_3d, EQ49_FACTOR,
+                               self.minimum_voidage, eps, su, sv)
+        return SolidsMap(eps, su, sv, int(clipped))

@@ -76,7 +76,7 @@ def _evaluate(code, per_bed, voidage, slip_speed, diameter, gas_density, gas_vis
     args = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in
                                  (voidage, slip_speed, diameter, gas_density, gas_viscosity, y_ratio)))
     shape = args[0].shape
-    flat = [np.ascontiguousarray(a).ravel() for a in args]
+    flat = [np.array(a, dtype=float, order="C").ravel() for a in args]  # owned, writeable copies
     eps = flat[0]
     if np.any(~(eps > 0.0) | ~(eps <= 1.0)):
         raise ValueError(f"voidage must lie in (0, 1]; got values from {eps.min()!r} to {eps.max()!r}")

@@ -1,0 +1,105 @@
+"""Where the wall time of a coupled run goes: DEM, gas solve, map, cell β, interpolation + drag.
+
+    python benchmarks/coupled_profile.py [--case tsuji-jet] [--until 0.2] [--repeat 3]
+                                         [--set coupling.drag_update=substep ...]
+
+Builds ``Simulation(load_case(case))`` (no run directory, no observers), warms the compiled
+kernels up with a short run of a copy, then times ``Simulation.run(until=…)`` of a fresh one.
+Each component is timed with ``time.perf_counter`` by wrapping the bound methods of that one
+simulation's objects (instance attributes; nothing global is patched):
+
+    DEM             engine.advance
+    gas solve       gas.solver.advance
+    map             gas._map            (particles → voidage, solids velocity)
+    beta            gas.cell_beta       (Sun 2007 eq. 33)
+    interp+drag     gas.set_particle_forces (Hoomans 1996 eqs 40-41 interpolation, drag, −V_p ∇p,
+                    and the swap into the engine's external and total forces)
+    other           the rest of run(): the step loop, chunking, checks
+
+Numbers are from a shared 2-vCPU machine: repeat (``--repeat``) and read the minimum.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from collections import defaultdict
+
+import fluidem as fd
+
+COMPONENTS = (("DEM", "engine", "advance"), ("gas solve", "solver", "advance"), ("map", "gas", "_map"),
+              ("beta", "gas", "cell_beta"), ("interp+drag", "gas", "set_particle_forces"))
+
+
+def _parse_sets(items):
+    out = {}
+    for s in items or []:
+        k, _, v = s.partition("=")
+        try:
+            out[k] = json.loads(v)
+        except json.JSONDecodeError:
+            out[k] = v
+    return out
+
+
+def _wrap(obj, name, key, acc, calls):
+    fn = getattr(obj, name)
+
+    def timed(*args, **kwargs):
+        t0 = time.perf_counter()
+        try:
+            return fn(*args, **kwargs)
+        finally:
+            acc[key] += time.perf_counter() - t0
+            calls[key] += 1
+
+    setattr(obj, name, timed)
+
+
+def profile(case, until: float) -> dict:
+    sim = fd.Simulation(case)
+    acc, calls = defaultdict(float), defaultdict(int)
+    owners = {"engine": sim.engine, "gas": sim.gas, "solver": sim.gas.solver}
+    for key, owner, name in COMPONENTS:
+        _wrap(owners[owner], name, key, acc, calls)
+    t0 = time.perf_counter()
+    sim.run(until=until)
+    total = time.perf_counter() - t0
+    row = {k: acc[k] for k, _, _ in COMPONENTS}
+    row["other"] = total - sum(row.values())
+    row["total"] = total
+    row["gas_steps"] = sim.gas.gas_steps
+    row["calls"] = dict(calls)
+    return row
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--case", default="tsuji-jet")
+    ap.add_argument("--until", type=float, default=0.2, help="simulated seconds [s]")
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--set", action="append", help="case override key=value (as `fluidem run --set`)")
+    ap.add_argument("--json", help="write the rows as JSON")
+    a = ap.parse_args()
+    case = fd.load_case(a.case)
+    sets = _parse_sets(a.set)
+    if sets:
+        case = case.with_overrides(sets)
+    fd.Simulation(case).run(until=min(a.until, 20 * case.gas.dt))  # compile / load the caches
+    rows = [profile(case, a.until) for _ in range(a.repeat)]
+    keys = [k for k, _, _ in COMPONENTS] + ["other", "total"]
+    n = rows[0]["gas_steps"]
+    print(f"case {a.case}, until {a.until} s, {n} gas steps, overrides {sets or 'none'}; fluidem {fd.__file__}")
+    print(f"{'component':12s} " + " ".join(f"{'run ' + str(r + 1):>9s}" for r in range(len(rows)))
+          + f" {'min':>9s} {'ms/gas step':>12s}")
+    for k in keys:
+        vals = [r[k] for r in rows]
+        print(f"{k:12s} " + " ".join(f"{v:9.3f}" for v in vals) + f" {min(vals):9.3f} {1e3 * min(vals) / n:12.4f}")
+    print("calls: " + ", ".join(f"{k} {v}" for k, v in rows[0]["calls"].items()))
+    if a.json:
+        with open(a.json, "w") as f:
+            json.dump({"case": a.case, "until": a.until, "overrides": sets, "rows": rows}, f, indent=2)
+
+
+if __name__ == "__main__":
+    main()

@@ -116,7 +116,7 @@ def test_report_is_one_self_contained_page(report, pour_run):
     assert "@import" not in text and "url(" not in text
     assert not re.search(r"<script[^>]*\bsrc=", text)
     # every figure is an embedded PNG that decodes
-    assert len(page.images) == 4
+    assert len(page.images) == 5  # snapshots, energy, contacts, multicontact, bed height
     for src in page.images:
         head, data = src.split(",", 1)
         assert head == "data:image/png;base64"
@@ -142,7 +142,8 @@ def test_report_is_one_self_contained_page(report, pour_run):
     assert stderr.strip().splitlines() == [
         f"fluidem report: skipped pressure: probes.csv has no pressure columns (pressure*, *_Pa), and {no_gas}",
         f"fluidem report: skipped voidage: {no_gas}",
-        f"fluidem report: skipped solids_fraction: {no_gas}"]
+        f"fluidem report: skipped solids_fraction: {no_gas}",
+        f"fluidem report: skipped forces: {no_gas}"]
 
 
 def test_report_of_an_incomplete_modified_run(pour_run, tmp_path):
@@ -155,14 +156,30 @@ def test_report_of_an_incomplete_modified_run(pour_run, tmp_path):
     assert rc == 0
     path = run / "report.html"
     assert stdout.strip() == str(path)
-    assert sorted(re.findall(r"skipped (\w+):", stderr)) == ["contacts", "energy", "pressure", "solids_fraction",
-                                                             "voidage"]
-    assert len(stderr.splitlines()) == 5
+    assert sorted(re.findall(r"skipped (\w+):", stderr)) == ["contacts", "energy", "forces", "multicontact",
+                                                             "pressure", "solids_fraction", "voidage"]
+    assert len(stderr.splitlines()) == 7
     page = parse(path)
     assert len(page.images) == 2  # snapshots and bed height (from the snapshots)
     text = html.unescape(path.read_text())
     assert "energy: the run has no probes.csv" in text
     assert "differs from the built-in case in: particles.contact.restitution = 1.0 (built-in: 0.9)" in text
+
+
+def test_report_rows_follow_the_case_name_and_settings(pour_run, tmp_path):
+    """The published table follows the case name in case.toml (here a pour run named as Hoomans' orifice
+    case, with a bubble in its summary) and shows the restitution and friction the outcome depends on."""
+    run = Path(shutil.copytree(pour_run, tmp_path / "run", ignore=shutil.ignore_patterns("restart.h5")))
+    case = run / "case.toml"
+    case.write_text(case.read_text().replace('name = "pour"', 'name = "hoomans-orifice"', 1))
+    summary = json.loads((run / "summary.json").read_text())
+    (run / "summary.json").write_text(json.dumps({**summary, "bubble_detected": True, "bubble_max_area_m2": 2e-3}))
+    rc, _, _ = quiet("report", run)
+    assert rc == 0
+    cells = {r[0]: r[1:] for r in parse(run / "report.html").rows}
+    pub, ours = cells["bubble at the orifice (jet 10 u_mf)"]
+    assert "bubble (turning into a slug) for non-ideal particles" in pub and "§5.3.1" in pub
+    assert ours == "bubble, largest 20 cm² (this run: e = 0.9, μ = 0.3)"
 
 
 # ---------------------------------------------------------------- headless Chromium

@@ -13,7 +13,7 @@ from pathlib import Path
 
 from .errors import CaseError
 
-COLOR_CHOICES = ("height", "speed", "species")
+COLOR_CHOICES = ("height", "speed", "species", "nc")
 
 
 def _require_matplotlib(command: str) -> None:
@@ -93,7 +93,7 @@ def cmd_report(args) -> int:
 def add_commands(subparsers) -> None:
     """Register ``plot``, ``animate``, ``compare`` and ``report`` on an argparse subparsers object."""
     p = subparsers.add_parser(
-        "plot", help="figures of a run (snapshots, energy, contacts, bed height, pressure, gas maps, …)",
+        "plot", help="figures of a run (snapshots, energy, contacts, bed height, pressure, gas and force maps, …)",
         description="Write the figures that apply to a run directory. A figure whose quantity the run "
                     "lacks is skipped with a one-line note.")
     p.add_argument("run", metavar="RUN", help="run directory (made by `fluidem run --out RUN`)")
@@ -101,16 +101,16 @@ def add_commands(subparsers) -> None:
                    help="snapshot times [s] to draw (nearest snapshot each); default: 4 evenly spaced, "
                         "first and last included")
     p.add_argument("--color", choices=COLOR_CHOICES, default="height",
-                   help="particle colour: band of initial height (Hoomans 1996 style), speed, or species "
-                        "(default: height)")
+                   help="particle colour: band of initial height (Hoomans 1996 style), speed, species, or nc "
+                        "(number of contacting particles N_c, Sun 2007 Figs 6/10) (default: height)")
     p.add_argument("--bands", type=int, default=6, help="number of initial-height bands (default 6)")
     p.add_argument("--format", default="png", metavar="FMT[,FMT]", help="png, svg and/or pdf (default png)")
     p.add_argument("--only", metavar="NAME[,NAME]",
-                   help="only these figures: snapshots, energy, contacts, bed_height, pressure, voidage, "
-                        "solids_fraction")
+                   help="only these figures: snapshots, energy, contacts, multicontact, bed_height, pressure, "
+                        "voidage, solids_fraction, forces")
     p.add_argument("--window", metavar="T0,T1",
-                   help="time window [s] of the time-averaged gas maps (default 5,10 when the run covers it, "
-                        "else the second half of the run)")
+                   help="time window [s] of the time averages: gas and force maps, multicontact means "
+                        "(default 5,10 when the run covers it, else the second half of the run)")
     p.add_argument("--no-overlay", action="store_true", help="draw the gas voidage maps without the particles")
     p.add_argument("--out", metavar="DIR", help="folder for the figures (default RUN/figures)")
     p.set_defaults(func=cmd_plot)

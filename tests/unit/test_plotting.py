@@ -10,6 +10,7 @@ import argparse
 import contextlib
 import csv
 import io
+import json
 import re
 import shutil
 from pathlib import Path
@@ -26,8 +27,8 @@ from fluidem.plotting import PlotOptions, RunData, comparison_rows, render  # no
 from fluidem.plotting.figures import parse_times, select_snapshots, view_of  # noqa: E402
 from fluidem.plotting.published import PUBLISHED  # noqa: E402
 
-ALL_FIGURES = {"snapshots_height", "energy", "contacts", "bed_height"}  # what a DEM run has
-GAS_ONLY = {"pressure", "voidage", "solids_fraction"}  # what a DEM run lacks: pressure probes and gas fields
+ALL_FIGURES = {"snapshots_height", "energy", "contacts", "multicontact", "bed_height"}  # what a DEM run has
+GAS_ONLY = {"pressure", "voidage", "solids_fraction", "forces"}  # what a DEM run lacks: pressure probes, gas, gas force
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 
@@ -139,9 +140,10 @@ def test_figures_change_when_the_data_change(pour_run, plotted, run_copy, tmp_pa
     path = mod / "probes.csv"
     with open(path, newline="") as f:
         rows = list(csv.DictReader(f))
-    for r in rows:
+    for k, r in enumerate(rows):
         r["kinetic_J"] = repr(3.0 * float(r["kinetic_J"]))
         r["coordination"] = repr(float(r["coordination"]) + 0.5)
+        r["multicontact_ratio"] = repr(0.5 + 0.4 * np.sin(k))
         r["contacts"] = str(int(r["contacts"]) + 10)
     with open(path, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
@@ -205,6 +207,7 @@ def test_plot_help_lists_every_registered_figure():
     (["--format", "jpg"], r"--format 'jpg': allowed are png, svg, pdf"),
     (["--only", "energie"], r"unknown figure 'energie'.*did you mean 'energy'"),
     (["--bands", "0"], r"--bands 0"),
+    (["--window", "1,2"], r"--window 1,2: no probe row in it; the probe rows run from 0 s to 0.05"),
 ])
 def test_bad_options_are_case_errors_and_write_nothing(pour_run, tmp_path, argv, message):
     out = tmp_path / "figs"
@@ -214,10 +217,11 @@ def test_bad_options_are_case_errors_and_write_nothing(pour_run, tmp_path, argv,
 
 
 @pytest.mark.parametrize("remove, skipped", [
-    (["probes.csv"], {"energy", "contacts"} | GAS_ONLY),
+    (["probes.csv"], {"energy", "contacts", "multicontact"} | GAS_ONLY),
     (["particles.h5"], {"snapshots", "bed_height"} | GAS_ONLY),
-    (["probes.csv", "particles.h5", "summary.json"], {"snapshots", "energy", "contacts", "bed_height"} | GAS_ONLY),
-    ("truncate probes.csv", {"energy", "contacts"} | GAS_ONLY),
+    (["probes.csv", "particles.h5", "summary.json"],
+     {"snapshots", "energy", "contacts", "multicontact", "bed_height"} | GAS_ONLY),
+    ("truncate probes.csv", {"energy", "contacts", "multicontact"} | GAS_ONLY),
     ("corrupt particles.h5", {"snapshots", "bed_height"} | GAS_ONLY),
 ])
 def test_a_missing_quantity_skips_its_figure_with_a_one_line_note(run_copy, tmp_path, capsys, remove, skipped):
@@ -249,6 +253,138 @@ def test_a_path_that_is_not_a_run_directory_is_a_case_error(tmp_path, command):
                           (tmp_path / "file.txt", "not a run directory")]:
         with pytest.raises(CaseError, match=message):
             fluidem(command, path)
+
+
+# ---------------------------------------------------------------- N_c colours (Sun et al. 2007 Figs 6/10)
+def rewrite_probes(run: Path, change) -> None:
+    """Rewrite probes.csv with ``change({column: float array}) -> {column: array}``."""
+    cols = {k: v.copy() for k, v in RunData(run).probes.items()}
+    cols = change(cols)
+    with open(run / "probes.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(list(cols))
+        w.writerows(zip(*[[repr(float(x)) for x in v] for v in cols.values()]))
+
+
+def set_last_contacts(run: Path, contacts) -> None:
+    with h5py.File(run / "particles.h5", "a") as f:
+        g = f["snapshots"][max(f["snapshots"])]
+        g["contacts"][...] = contacts
+
+
+def test_nc_colours_follow_each_particles_contact_number(run_copy, tmp_path):
+    """--color nc: N_c 0, 1, 2, 3 and >= 4 get the five colours of style.NC_COLOURS, keyed in a legend;
+    other contact numbers draw other pixels."""
+    from matplotlib.colors import to_rgba_array
+
+    from fluidem.plotting import style
+    from fluidem.plotting.figures import Colourer
+
+    run = run_copy("nc")
+    n = len(RunData(run).snapshot(-1)["diameter"])
+    set_last_contacts(run, np.arange(n) % 7)  # 0..6: the classes 0, 1, 2, 3 and >= 4
+    data = RunData(run)
+    first, last = data.snapshot(0), data.snapshot(-1)
+    colours = Colourer("nc", data, view_of(data, first), first).colours(last)
+    expected = to_rgba_array(style.NC_COLOURS)[np.minimum(np.arange(n) % 7, 4)]
+    np.testing.assert_array_equal(colours, expected)
+    [(_, fig, why)] = list(render(data, PlotOptions(color="nc", times=[0.05]), only=["snapshots"]))
+    assert why is None
+    assert [t.get_text() for leg in fig.legends for t in leg.get_texts()] == list(style.NC_LABELS)
+    imgs = {}
+    for key, contacts, colour in [("nc", None, "nc"), ("height", None, "height"), ("zero", 0, "nc")]:
+        if contacts is not None:
+            set_last_contacts(run, contacts)
+        out = tmp_path / key
+        assert fluidem("plot", run, "--only", "snapshots", "--times", "0.05", "--color", colour, "--out", out) == 0
+        imgs[key] = read_png(out / f"snapshots_{colour}.png")
+        assert_not_blank(imgs[key], key)
+    assert fraction_changed(imgs["nc"], imgs["height"]) > 1e-3
+    assert fraction_changed(imgs["nc"], imgs["zero"]) > 1e-3
+
+
+def test_nc_colours_without_a_contacts_field_skip_with_a_note(run_copy, tmp_path, capsys):
+    run = run_copy("old")
+    with h5py.File(run / "particles.h5", "a") as f:  # a run written before N_c was stored
+        for key in f["snapshots"]:
+            del f["snapshots"][key]["contacts"]
+    out = tmp_path / "figs"
+    assert fluidem("plot", run, "--only", "snapshots,energy", "--color", "nc", "--out", out) == 0
+    notes = stderr_notes(capsys.readouterr().err, "plot")
+    assert set(notes) == {"snapshots"} and "particles.h5 has no field contacts" in notes["snapshots"]
+    assert [p.name for p in out.iterdir()] == ["energy.png"]
+    with pytest.raises(CaseError, match="no field contacts"):
+        fluidem("animate", run, "--color", "nc", "--out", tmp_path / "nc.mp4")
+
+
+# ---------------------------------------------------------------- multicontact (Sun et al. 2007 Figs 5/11)
+def test_multicontact_figure_shows_both_traces_and_their_window_means(run_copy, tmp_path):
+    run = run_copy("mc")
+    rewrite_probes(run, lambda c: {**c, "multicontact_ratio": 0.3 + 0.2 * np.sin(200.0 * c["time_s"]),
+                                   "coordination": 1.2 + np.cos(300.0 * c["time_s"])})
+    p = RunData(run).probes
+    t = p["time_s"]
+    for window, inside in [(None, t >= 0.5 * t[-1] - 1e-12),  # pour has no summary window: the second half
+                           ((0.01, 0.03), (t >= 0.01 - 1e-12) & (t <= 0.03 + 1e-12))]:
+        [(_, fig, why)] = list(render(RunData(run), PlotOptions(window=window), only=["multicontact"]))
+        assert why is None
+        for ax, col in zip(fig.axes, ("coordination", "multicontact_ratio")):
+            np.testing.assert_array_equal(ax.lines[0].get_ydata(), p[col])
+            legend = [x.get_text() for x in ax.get_legend().get_texts()]
+            mean = float(re.search(r": (\S+)$", legend[1]).group(1))
+            assert mean == pytest.approx(p[col][inside].mean(), rel=1e-2), (col, window)
+    # summary.json's window (coupled runs) is the default
+    summary = json.loads((run / "summary.json").read_text())
+    (run / "summary.json").write_text(json.dumps({**summary, "averages_window_s": [0.0, 0.02]}))
+    [(_, fig, _)] = list(render(RunData(run), PlotOptions(), only=["multicontact"]))
+    assert fig.axes[0].get_legend().get_texts()[1].get_text().startswith("mean over 0–0.02 s")
+
+    base, mod = tmp_path / "base", tmp_path / "mod"
+    assert fluidem("plot", run, "--only", "multicontact", "--out", base) == 0
+    rewrite_probes(run, lambda c: {**c, "multicontact_ratio": 0.9 - 0.3 * c["multicontact_ratio"]})
+    assert fluidem("plot", run, "--only", "multicontact", "--out", mod) == 0
+    a = read_png(base / "multicontact.png")
+    assert_not_blank(a, "multicontact")
+    assert fraction_changed(a, read_png(mod / "multicontact.png")) > 1e-3
+
+
+def test_multicontact_without_its_column_is_skipped_with_a_note(run_copy, tmp_path, capsys):
+    run = run_copy("nomc")
+    rewrite_probes(run, lambda c: {k: v for k, v in c.items() if k != "multicontact_ratio"})
+    assert fluidem("plot", run, "--only", "multicontact,contacts", "--out", tmp_path / "f") == 0
+    notes = stderr_notes(capsys.readouterr().err, "plot")
+    assert notes == {"multicontact": "probes.csv has no column multicontact_ratio"}
+
+
+# ---------------------------------------------------------------- hard-sphere energy (Hoomans et al. 1996 Fig 9)
+def test_hard_sphere_energy_adds_the_dissipated_energy_and_a_conserved_sum(pour_run, run_copy, tmp_path):
+    run = run_copy("hard")
+
+    def hard_sphere_columns(c):  # what collisions dissipated: everything the soft-sphere run lost, 80 % normal
+        lost = (c["potential_J"][0] - c["potential_J"]) - c["kinetic_J"] - c["rotational_J"]
+        return {**c, "dissipated_normal_J": 0.8 * lost, "dissipated_tangential_J": 0.2 * lost,
+                "total_energy_J": c["kinetic_J"] + c["rotational_J"] + c["potential_J"] + lost}
+
+    rewrite_probes(run, hard_sphere_columns)
+    summary = json.loads((run / "summary.json").read_text())
+    (run / "summary.json").write_text(json.dumps({**summary, "energy_error_rel": 5e-5}))
+    p = RunData(run).probes
+    [(_, fig, why)] = list(render(RunData(run), PlotOptions(), only=["energy"]))
+    assert why is None
+    ax = fig.axes[0]
+    lines = {ln.get_label(): np.asarray(ln.get_ydata()) for ln in ax.lines}
+    assert list(lines) == ["kinetic", "rotational", "potential − final potential", "dissipated in collisions", "sum"]
+    np.testing.assert_allclose(lines["dissipated in collisions"],
+                               p["dissipated_normal_J"] + p["dissipated_tangential_J"], rtol=1e-12)
+    # kinetic + rotational + potential + dissipated is conserved: the sum is flat at the potential energy released
+    released = p["potential_J"][0] - p["potential_J"][-1]
+    np.testing.assert_allclose(lines["sum"], released, rtol=1e-9, atol=1e-12 * released)
+    assert ax.get_title() == "energy budget (energy conservation error 0.005 %)"
+    out = tmp_path / "hard"
+    assert fluidem("plot", run, "--only", "energy", "--out", out) == 0
+    soft = tmp_path / "soft"
+    assert fluidem("plot", pour_run, "--only", "energy", "--out", soft) == 0
+    assert fraction_changed(read_png(out / "energy.png"), read_png(soft / "energy.png")) > 1e-3
 
 
 # ---------------------------------------------------------------- 3D projection
@@ -385,9 +521,50 @@ def test_published_table_for_pour():
     assert comparison_rows("no-such-case", {}) == []
 
 
+def test_published_tables_of_the_sun_cases_show_this_runs_window_means():
+    summary = {"mean_particle_height_avg_m": 0.0871, "coordination_number_avg": 0.47, "multicontact_ratio_avg": 0.28,
+               "averages_window_s": [5.0, 10.0], "pressure_20cm_dominant_frequency_Hz": 3.4}
+    rows = {q: (pub, ours) for q, pub, ours in comparison_rows("goldschmidt", summary)}
+    pub, ours = rows["mean particle height"]
+    assert pub.startswith("8.9 cm (TF-DEM") and "9.16 cm (two-fluid model)" in pub and "11.4 cm (experiment" in pub
+    assert ours == "8.71 cm (mean over 5–10 s)"
+    assert rows["bulk coordination number"] == ("about 0.5 (Sun et al. 2007 Fig 5, uniform inflow)",
+                                                "0.47 (mean over 5–10 s)")
+    assert rows["multicontact ratio"][1] == "0.28 (mean over 5–10 s)"
+    assert rows["largest contact force / drag"][1] == "not measured yet; see the forces figure"
+    short = {**summary, "averages_window_s": [0.25, 0.5]}  # a shorter run: its second half, and the table says so
+    rows = {q: (pub, ours) for q, pub, ours in comparison_rows("tsuji-jet", short)}
+    assert rows["bulk coordination number"] == ("about 1.2 (Sun et al. 2007 Fig 5, central jet)",
+                                                "0.47 (mean over 0.25–0.5 s)")
+    assert rows["multicontact ratio"][0].startswith("above 0.6")
+    pub, ours = rows["dominant frequency of the pressure drop 20 cm above the inlet"]
+    assert pub.startswith("Fig 3 (not given numerically)") and ours == "3.4 Hz (power spectrum over 0.25–0.5 s)"
+    assert comparison_rows("tsuji-jet", {})[0][2] == "not measured by this run"
+
+
+def test_published_tables_of_the_hoomans_cases():
+    rows = comparison_rows("hoomans-pour", {"packing_fraction": 0.8301, "energy_error_rel": 2.6e-5})
+    assert rows[0][1].startswith("0.832 ± 0.010") and rows[0][2] == "0.83 (inside the published range)"
+    assert rows[1][1].startswith("0.005 %") and rows[1][2] == "0.0026 %"
+    assert comparison_rows("hoomans-pour", {})[1][2] == "not measured by this run"
+    non_ideal = {"particles": {"contact": {"model": "hard_sphere", "restitution": 0.9, "friction": 0.3}}}
+    ideal = {"particles": {"contact": {"model": "hard_sphere", "restitution": 1.0, "friction": 0.0}}}
+    [(_, pub, ours)] = comparison_rows("hoomans-orifice", {"bubble_detected": True, "bubble_max_area_m2": 1.2e-3},
+                                       non_ideal)
+    assert "bubble (turning into a slug) for non-ideal" in pub and "none for ideal" in pub
+    assert ours == "bubble, largest 12 cm² (this run: e = 0.9, μ = 0.3)"
+    assert comparison_rows("hoomans-slug", {"bubble_detected": False}, ideal)[0][2] == "no bubble (this run: e = 1, μ = 0)"
+    assert comparison_rows("hoomans-tsuji", {"bubble": False})[0][2] == "no bubble"  # the older key
+    assert comparison_rows("hoomans-tsuji", {})[0][1].startswith("no bubble")
+    for case in ("hoomans-orifice", "hoomans-slug", "hoomans-tsuji", "hoomans-experiment"):
+        assert comparison_rows(case, {"status": "completed"}, non_ideal)[0][2] == "—"  # not measured
+    assert comparison_rows("hoomans-experiment", {})[0][1].startswith("a bubble forms at the orifice")
+
+
 @pytest.mark.parametrize("case", sorted(PUBLISHED))
 def test_published_entries_are_complete(case):
     for v in PUBLISHED[case]:
         assert v.quantity and v.published and v.source
-        assert v.summary_key is None or re.fullmatch(r"[a-z0-9_]+", v.summary_key)
-        assert v.this_run({}) in (v.when_missing, "not measured yet")
+        keys = [k for k in (v.summary_key, *v.fallback_keys, v.window_key, *(d[1] for d in v.details)) if k]
+        assert all(re.fullmatch(r"[a-z0-9_]+(_Hz|_Pa)?", k) for k in keys), keys  # summary.json keys, units as suffix
+        assert v.this_run({}) in (v.when_missing, "not measured yet") or v.this_run({}).startswith("not measured yet; see ")

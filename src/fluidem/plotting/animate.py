@@ -35,7 +35,7 @@ def frame_size(aspect: float, height_px: int, colour_mode: str) -> tuple[int, in
     """(width, height) [px] of a frame for a domain of width/height ``aspect``, both multiples of 16."""
     height = max(BLOCK, int(round(height_px / BLOCK)) * BLOCK)
     plot_h = height - 110  # title and x labels
-    extra = 190 if colour_mode == "speed" else 110  # y labels (+ colour bar)
+    extra = 190 if colour_mode in ("speed", "nc") else 110  # y labels (+ colour bar or N_c key)
     width = plot_h * aspect + extra
     width = int(np.clip(np.ceil(width / BLOCK) * BLOCK, 12 * BLOCK, 160 * BLOCK))
     return width, height
@@ -104,7 +104,7 @@ def _write_frames(iio, run: RunData, path: Path, color: str, fps: float, height_
         setup_particle_axes(ax, view)
         if color == "speed":
             colourer.decorate(fig, [ax], [first])
-        elif color == "species":
+        elif color in ("species", "nc"):
             colourer.decorate(fig, [ax], [first, run.snapshot(-1)])
         writer = iio.get_writer(path, format="FFMPEG", mode="I", fps=fps, codec="libx264",
                                 pixelformat="yuv420p", macro_block_size=BLOCK, quality=8,

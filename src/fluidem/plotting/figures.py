@@ -7,13 +7,17 @@ was skipped; ``plot_run`` writes them. A new quantity (gas voidage maps, pressur
 probes, segregation indices) is one more decorated function here, nothing else.
 
 Registered today: ``snapshots`` (particles at chosen times, Hoomans et al. 1996 Figs
-8/10/12), ``energy`` (budget against time, Hoomans Fig 9), ``contacts`` (coordination
-number and contacts, Sun et al. 2007), ``bed_height`` (mean particle height, Sun 2007),
+8/10/12; coloured by N_c, Sun et al. 2007 Figs 6/10), ``energy`` (budget against time,
+with the dissipated energy of hard-sphere runs, Hoomans Fig 9), ``contacts``
+(coordination number and contacts, Sun et al. 2007), ``multicontact`` (bulk coordination
+number and multicontact ratio, Sun Figs 5/11), ``bed_height`` (mean particle height, Sun 2007),
 ``pressure`` (pressure probes against time and their power spectrum with the dominant
 frequency, Hoomans Figs 11/13 and Sun Fig 3: probe columns ``pressure*`` / ``*_Pa``, else
 the gas field 0.2 m above the bottom centre), ``voidage`` (gas voidage maps at chosen
 times with the particles over them, Hoomans Figs 10/12) and ``solids_fraction``
-(time-averaged solids fraction map, Sun Figs 4/8/13). The gas figures read ``gas.h5``
+(time-averaged solids fraction map, Sun Figs 4/8/13) and ``forces`` (contact and gas
+force per particle weight and their ratio on the gas grid, Sun Figs 7/12, from the
+particle snapshots' ``contact_force`` and ``gas_force``). The gas figures read ``gas.h5``
 (``fluidem.io.gas_fields``).
 """
 from __future__ import annotations
@@ -29,7 +33,7 @@ from ..registry import Registry
 from . import style
 from .run import RunData, Unavailable
 
-COLOR_MODES = ("height", "speed", "species")
+COLOR_MODES = ("height", "speed", "species", "nc")
 DEFAULT_PANELS = 4
 
 
@@ -39,11 +43,14 @@ class PlotOptions:
 
     times : snapshot times [s] to draw (nearest snapshot each); None: ``DEFAULT_PANELS``
         evenly spaced, first and last included. Used by the particle and voidage maps.
-    color : "height" (band of initial height), "speed" (|v| [m/s]) or "species".
+    color : "height" (band of initial height), "speed" (|v| [m/s]), "species" or "nc" (the
+        particle's number of contacting particles N_c, classes 0, 1, 2, 3, ≥4; Sun et al.
+        2007 Figs 6/10; needs the snapshots' ``contacts`` field).
     bands : number of initial-height bands.
     overlay : draw the particles over the gas voidage maps.
-    window : (t0, t1) [s] of the time average of gas fields; None: 5-10 s when the run
-        covers it (Sun et al. 2007), else the second half of the run.
+    window : (t0, t1) [s] of the time averages (gas-field maps, force maps, the mean lines of
+        the multicontact figure); None: 5-10 s when the run covers it (Sun et al. 2007),
+        else the second half of the run.
     """
 
     times: list[float] | None = None
@@ -138,6 +145,12 @@ def plot_run(run: RunData, out_dir: Path, options: PlotOptions | None = None, fo
         select_snapshots(run.gas_times, options.times)
     if options.window is not None and run.lacks_gas() is None and (only is None or "solids_fraction" in only):
         averaging_window(run.gas_times, options.window)
+    if options.window is not None and (only is None or "forces" in only) and _lacks_forces(run) is None:
+        averaging_window(run.snapshot_times, options.window, what="particle snapshot")
+    if options.window is not None and (only is None or "multicontact" in only) \
+            and run.lacks_probes(*MULTICONTACT_COLUMNS) is None:
+        t = run.probes["time_s"]
+        averaging_window(t[np.isfinite(t)], options.window, what="probe row")
     result = PlotResult()
     out_dir = Path(out_dir)
     with style.context():
@@ -318,6 +331,9 @@ class Colourer:
             self._band = band[order]
             self.bands = bands
             self.first_time = first["time"]
+        elif mode == "nc" and "contacts" not in run.snapshot_fields:
+            raise Unavailable(f"colour nc: {run.lacks_snapshot_fields('contacts')} (the contact number N_c of each "
+                              "particle; runs write it since the Sun 2007 analyses)")
         elif mode == "speed":
             from matplotlib.colors import Normalize
 
@@ -340,11 +356,16 @@ class Colourer:
         if self.mode == "speed":
             speed = np.linalg.norm(snap["velocity"], axis=1)
             return self.cmap(self.norm(speed))
+        if self.mode == "nc":
+            if "contacts" not in snap:
+                raise Unavailable(f"colour nc: the snapshot at t = {snap['time']:g} s has no contacts field")
+            pal = to_rgba_array(style.NC_COLOURS)
+            return pal[np.clip(np.asarray(snap["contacts"], np.int64), 0, len(pal) - 1)]
         pal = to_rgba_array(style.LINE_COLOURS)
         return pal[np.asarray(snap["species"], np.int64) % len(pal)]
 
     def decorate(self, fig, axes, snaps) -> None:
-        """Colour bar (speed), legend (species) or a note on the bands (height)."""
+        """Colour bar (speed), legend (species, N_c) or a note on the bands (height)."""
         from matplotlib.cm import ScalarMappable
         from matplotlib.patches import Patch
 
@@ -356,6 +377,9 @@ class Colourer:
             handles = [Patch(facecolor=style.LINE_COLOURS[s % len(style.LINE_COLOURS)], edgecolor="k",
                              label=names[s] if s < len(names) else f"species {s}") for s in present]
             fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), 4))
+        elif self.mode == "nc":
+            handles = [Patch(facecolor=c, edgecolor="k", label=lab) for c, lab in zip(style.NC_COLOURS, style.NC_LABELS)]
+            fig.legend(handles=handles, loc="outside right upper", ncols=1)  # a discrete key beside the panels
         else:
             fig.suptitle(f"colour: band of initial height ({self.bands} bands at t = {self.first_time:.3g} s)",
                          fontsize=style.RC["font.size"])
@@ -403,8 +427,8 @@ def _time_title(t: float) -> str:
     return f"t = {t:.3f} s" if abs(t) >= 1e-3 or t == 0 else f"t = {t:.3g} s"
 
 
-@figure("snapshots", "particles at chosen times, coloured by initial height band, speed or species "
-                     "(Hoomans et al. 1996 Figs 8/10/12)",
+@figure("snapshots", "particles at chosen times, coloured by initial height band, speed, species "
+                     "(Hoomans et al. 1996 Figs 8/10/12) or number of contacts N_c (Sun et al. 2007 Figs 6/10)",
         lacks=lambda run: run.lacks_snapshots(), stem=lambda o: f"snapshots_{o.color}")
 def draw_snapshots(run: RunData, options: PlotOptions):
     indices = select_snapshots(run.snapshot_times, options.times)
@@ -415,7 +439,7 @@ def draw_snapshots(run: RunData, options: PlotOptions):
     colourer = Colourer(options.color, run, view, first, options.bands, vmax)
     n = len(snaps)
     panel_w = float(np.clip(style.PANEL_HEIGHT_IN * view.aspect, 1.3, 8.0))
-    extra = 1.1 if options.color == "speed" else 0.5
+    extra = 1.1 if options.color in ("speed", "nc") else 0.5
     fig = style.new_figure(n * panel_w + extra, style.PANEL_HEIGHT_IN + 0.8)
     axes = fig.subplots(1, n, sharey=True, squeeze=False)[0]
     for i, (ax, snap) in enumerate(zip(axes, snaps)):
@@ -435,8 +459,11 @@ def _trace_axes(nrows: int = 1):
     return fig, axes
 
 
-@figure("energy", "kinetic, rotational and potential energy (relative to its final value) and their sum "
-                  "against time (Hoomans et al. 1996 Fig 9)",
+DISSIPATED_COLUMNS = ("dissipated_normal_J", "dissipated_tangential_J")  # hard-sphere runs (Hoomans eq. 51)
+
+
+@figure("energy", "kinetic, rotational and potential energy (relative to its final value), in hard-sphere runs "
+                  "the energy dissipated in collisions, and their sum against time (Hoomans et al. 1996 Fig 9)",
         lacks=lambda run: run.lacks_probes("kinetic_J", "potential_J"))
 def draw_energy(run: RunData, options: PlotOptions):
     p = run.probes
@@ -452,9 +479,19 @@ def draw_energy(run: RunData, options: PlotOptions):
         rotational = p["rotational_J"]
         ax.plot(t, rotational, label="rotational")
     ax.plot(t, pe_rel, label="potential − final potential")
-    ax.plot(t, kinetic + rotational + pe_rel, color="k", lw=1.8, label="sum")
+    total = kinetic + rotational + pe_rel
+    dissipated = [c for c in DISSIPATED_COLUMNS if c in p]
+    if dissipated:  # hard spheres book what collisions take (Hoomans eqs 23, 27, 29): the sum is conserved
+        lost = np.sum([p[c] for c in dissipated], axis=0)
+        ax.plot(t, lost, label="dissipated in collisions")
+        total = total + lost
+    ax.plot(t, total, color="k", lw=1.8, label="sum")
     ax.set_ylabel("energy [J]")
-    ax.set_title("energy budget")
+    title = "energy budget"
+    err = (run.summary or {}).get("energy_error_rel")
+    if dissipated and isinstance(err, (int, float)) and not isinstance(err, bool) and np.isfinite(err):
+        title += f" (energy conservation error {100.0 * err:.2g} %)"
+    ax.set_title(title)
     ax.legend(loc="best")
     return fig
 
@@ -476,6 +513,51 @@ def draw_contacts(run: RunData, options: PlotOptions):
         if len(cols) > 1:
             ax.legend(loc="best")
     axes[0].set_title("contacts")
+    return fig
+
+
+def _summary_window(run: RunData) -> tuple[float, float] | None:
+    """The window of the time averages in summary.json (``averages_window_s``), or None."""
+    w = (run.summary or {}).get("averages_window_s")
+    try:
+        t0, t1 = (float(x) for x in w)
+    except (TypeError, ValueError):
+        return None
+    return (t0, t1) if np.isfinite(t0) and np.isfinite(t1) and t0 < t1 else None
+
+
+MULTICONTACT_COLUMNS = ("coordination", "multicontact_ratio")
+
+
+@figure("multicontact", "bulk coordination number (mean N_c) and multicontact ratio (particles with N_c > 1 over "
+                        "those with N_c ≥ 1) against time, with their means over the averaging window "
+                        "(Sun et al. 2007 Figs 5 and 11)",
+        lacks=lambda run: run.lacks_probes(*MULTICONTACT_COLUMNS))
+def draw_multicontact(run: RunData, options: PlotOptions):
+    p = run.probes
+    t = p["time_s"]
+    ok = np.isfinite(t)
+    if not ok.any():
+        raise Unavailable("probes.csv has no finite times")
+    window = options.window or _summary_window(run)
+    try:
+        t0, t1, mask = averaging_window(t[ok], window, what="probe row")
+    except CaseError as err:
+        raise Unavailable(str(err)) from None
+    fig, axes = _trace_axes(2)
+    titles = ("bulk coordination number", "multicontact ratio")
+    for ax, col, title in zip(axes, MULTICONTACT_COLUMNS, titles):
+        y = p[col][ok]
+        ax.plot(t[ok], y, label=style.label(col).split(" [")[0])
+        ax.axvspan(t0, t1, color="0.5", alpha=0.12, lw=0)
+        vals = y[mask][np.isfinite(y[mask])]
+        if vals.size:
+            mean = float(vals.mean())
+            ax.hlines(mean, t0, t1, colors="k", linestyles="--", lw=1.2,
+                      label=f"mean over {t0:.3g}–{t1:.3g} s: {mean:.3g}")
+        ax.set_ylabel(style.label(col))
+        ax.set_title(title)
+        ax.legend(loc="best")
     return fig
 
 
@@ -635,12 +717,13 @@ def draw_pressure(run: RunData, options: PlotOptions):
 
 
 # ---------------------------------------------------------------- gas-field maps
-def averaging_window(times: np.ndarray, requested: tuple[float, float] | None = None) -> tuple[float, float, np.ndarray]:
-    """(t0, t1, mask of ``times`` inside) of a time average of gas fields.
+def averaging_window(times: np.ndarray, requested: tuple[float, float] | None = None,
+                     what: str = "gas-field snapshot") -> tuple[float, float, np.ndarray]:
+    """(t0, t1, mask of ``times`` inside) of a time average over samples at ``times`` (sorted) [s].
 
-    ``requested=None``: 5-10 s when the snapshots cover it (Sun et al. 2007 Figs 4/8/13),
-    else the second half of the snapshots' span. A requested window with no snapshot in it
-    is a CaseError.
+    ``requested=None``: 5-10 s when the samples cover it (Sun et al. 2007 Figs 4/8/13),
+    else the second half of the samples' span. A requested window with no sample in it
+    is a CaseError naming ``what`` the samples are.
     """
     times = np.asarray(times, float)
     tol = 1e-9 * max(abs(times[-1]), 1.0)
@@ -653,29 +736,36 @@ def averaging_window(times: np.ndarray, requested: tuple[float, float] | None = 
         t0, t1 = requested
     mask = (times >= t0 - tol) & (times <= t1 + tol)
     if not mask.any():
-        raise CaseError(f"--window {t0:g},{t1:g}: no gas-field snapshot in it; the gas fields run from "
-                        f"{times[0]:g} s to {times[-1]:g} s ({len(times)} snapshots)")
+        raise CaseError(f"--window {t0:g},{t1:g}: no {what} in it; the {what}s run from "
+                        f"{times[0]:g} s to {times[-1]:g} s ({len(times)} of them)")
     return float(t0), float(t1), mask
 
 
 def _map_axes(run: RunData, npanels: int, colourbar: bool = True):
     """A row of ``npanels`` map axes sized to the gas domain, the x–y plane of the grid."""
     g = run.gas
-    xf, yf = g["x_faces"], g["y_faces"]
-    aspect = (xf[-1] - xf[0]) / (yf[-1] - yf[0])
+    fig, axes = _map_grid(g["x_faces"], g["y_faces"], 1, npanels, 1.6 if colourbar else 0.7)
+    return fig, axes[0]
+
+
+def _map_grid(xf, yf, nrows: int, ncols: int, extra_w: float = 1.6, extra_h: float = 0.8, ylim=None):
+    """``nrows`` × ``ncols`` map axes over x faces ``xf`` and y faces ``yf`` [m] (y limited to ``ylim``):
+    (figure, axes (nrows, ncols)); the x–y plane of the grid, equal aspect."""
+    y0, y1 = (yf[0], yf[-1]) if ylim is None else ylim
+    aspect = (xf[-1] - xf[0]) / (y1 - y0)
     panel_w = float(np.clip(style.PANEL_HEIGHT_IN * aspect, 1.4, 8.0))
     # "compressed": constrained layout for fixed-aspect panels (plain constrained layout narrows them
     # after placing their labels, which can push the y label off the edge)
-    fig = style.new_figure(npanels * panel_w + (1.6 if colourbar else 0.7), style.PANEL_HEIGHT_IN + 0.8,
-                           layout="compressed")
-    axes = fig.subplots(1, npanels, sharey=True, squeeze=False)[0]
-    for k, ax in enumerate(axes):
+    fig = style.new_figure(ncols * panel_w + extra_w, nrows * style.PANEL_HEIGHT_IN + extra_h, layout="compressed")
+    axes = fig.subplots(nrows, ncols, sharex=True, sharey=True, squeeze=False)
+    for (r, c), ax in np.ndenumerate(axes):
         ax.set_xlim(xf[0], xf[-1])
-        ax.set_ylim(yf[0], yf[-1])
+        ax.set_ylim(y0, y1)
         ax.set_aspect("equal")
         ax.grid(False)
-        ax.set_xlabel("x [m]")
-        if k == 0:
+        if r == nrows - 1:
+            ax.set_xlabel("x [m]")
+        if c == 0:
             ax.set_ylabel("y [m]")
     return fig, axes
 
@@ -758,4 +848,137 @@ def draw_solids_fraction(run: RunData, options: PlotOptions):
     fig.colorbar(mesh, ax=ax, label="mean " + style.label("solids_fraction"), shrink=0.8)
     n = int(mask.sum())
     ax.set_title(f"mean over t = {t0:.3g}–{t1:.3g} s\n({n} snapshot{'s' if n != 1 else ''})")
+    return fig
+
+
+# ---------------------------------------------------------------- force maps
+FORCE_FIELDS = ("contact_force", "gas_force")
+FORCE_SCALE_PERCENTILE = 99.0  # colour scales end here, so one corner cell does not wash out the maps
+
+
+def _lacks_forces(run: RunData) -> str | None:
+    if not run.has_gas_phase:
+        return "the run has no gas phase (its case.toml has no [gas] section)"
+    why = run.lacks_snapshot_fields(*FORCE_FIELDS)
+    if why is not None:
+        if run.lacks_snapshots() is None:
+            why += (" (coupled soft-sphere runs write contact_force and gas_force; hard-sphere collisions are "
+                    "impulses, without a contact force)")
+        return why
+    try:
+        run.gas_grid()
+        run.particle_mass(np.zeros(1), np.zeros(1, np.int64))  # the case gives the species densities
+    except Unavailable as err:
+        return str(err)
+    if not np.linalg.norm(run.gravity) > 0:
+        return "the case has no gravity, and the force maps are scaled by the particle weight m g"
+    return None
+
+
+@dataclass
+class ForceMaps:
+    """Cell maps (nx, ny) of ``fluidem.analysis.fluidised.cell_force_maps``: ``contact_force`` and
+    ``drag_force`` (means of |F| / (m g)), ``force_ratio`` (contact / drag, −1 where the drag is zero,
+    NaN in empty cells) and ``particles`` (particle samples per cell), averaged over the ``snapshots``
+    between ``t0`` and ``t1`` [s] (one snapshot, t0 = t1, for the instantaneous maps)."""
+
+    contact_force: np.ndarray
+    drag_force: np.ndarray
+    force_ratio: np.ndarray
+    particles: np.ndarray
+    t0: float
+    t1: float
+    snapshots: int
+
+
+def force_maps(run: RunData, window: tuple[float, float] | None = None) -> tuple[ForceMaps, ForceMaps]:
+    """(instantaneous maps at the last snapshot of the window, maps averaged over the window).
+
+    The window is ``averaging_window`` of the particle snapshots (5–10 s when covered, else the
+    second half). The average is over every particle sample of a cell in the window: the sums of
+    |F| / (m g) over snapshots divided by the summed particle count, so a cell visited once by one
+    particle weighs as little as that one sample; the ratio is the averaged contact over the
+    averaged drag force (−1 where no sample had drag). Raises ``Unavailable``.
+    """
+    from ..analysis.fluidised import cell_force_maps
+
+    grid = run.gas_grid()
+    times = run.snapshot_times
+    try:
+        t0, t1, mask = averaging_window(times, window, what="particle snapshot")
+    except CaseError as err:
+        raise Unavailable(str(err)) from None
+    indices = list(np.flatnonzero(mask))
+    shape = grid.shape
+    sum_c, sum_d, count = np.zeros(shape), np.zeros(shape), np.zeros(shape)
+    last = None
+    fields = ("position", "diameter", "species", *FORCE_FIELDS)
+    for t, snap in run.iter_snapshots(fields, indices=indices):
+        missing = [f for f in ("position", "diameter", *FORCE_FIELDS) if f not in snap]
+        if missing:
+            raise Unavailable(f"the snapshot at t = {t:g} s has no {', '.join(missing)}")
+        species = snap.get("species", np.zeros(len(snap["diameter"]), np.int64))
+        mass = run.particle_mass(snap["diameter"], species)
+        m = cell_force_maps(grid, snap["position"], mass, snap["contact_force"], snap["gas_force"], run.gravity)
+        n = m["particles"]
+        sum_c += np.where(n > 0, m["contact_force"] * n, 0.0)
+        sum_d += np.where(n > 0, m["drag_force"] * n, 0.0)
+        count += n
+        last = (t, m)
+    t_last, m = last
+    inst = ForceMaps(m["contact_force"], m["drag_force"], m["force_ratio"], m["particles"], t_last, t_last, 1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        occupied = count > 0
+        mean_c = np.where(occupied, sum_c / np.where(occupied, count, 1.0), np.nan)
+        mean_d = np.where(occupied, sum_d / np.where(occupied, count, 1.0), np.nan)
+        ratio = np.where(occupied, np.where(sum_d > 0, sum_c / np.where(sum_d > 0, sum_d, 1.0), -1.0), np.nan)
+    avg = ForceMaps(mean_c, mean_d, ratio, count, t0, t1, len(indices))
+    return inst, avg
+
+
+def _upper(values, floor: float = 1e-12) -> tuple[float, bool]:
+    """Colour-scale top: the FORCE_SCALE_PERCENTILE of the finite values; and whether values exceed it."""
+    v = np.concatenate([np.ravel(x)[np.isfinite(np.ravel(x))] for x in values])
+    if v.size == 0:
+        return 1.0, False
+    top = max(float(np.percentile(v, FORCE_SCALE_PERCENTILE)), floor)
+    return top, bool(v.max() > top)
+
+
+@figure("forces", "contact force and gas (drag) force per particle weight and their ratio (−1: no drag) on the "
+                  "gas grid, at the last snapshot of the averaging window and averaged over it "
+                  "(default 5–10 s, else the second half; Sun et al. 2007 Figs 7/12)",
+        lacks=_lacks_forces)
+def draw_forces(run: RunData, options: PlotOptions):
+    import matplotlib
+    from matplotlib.colors import Normalize
+
+    grid = run.gas_grid()
+    inst, avg = force_maps(run, options.window)
+    xf = np.linspace(0.0, grid.size[0], grid.nx + 1)
+    yf = np.linspace(0.0, grid.size[1], grid.ny + 1)
+    # like Sun's figures (the lower 45 cm of a 90 cm column), show the rows particles reached, not the freeboard
+    rows = np.flatnonzero(avg.particles.sum(axis=0) > 0)
+    top = yf[-1] if rows.size == 0 else min(yf[-1], yf[rows[-1] + 1] + 0.1 * (yf[-1] - yf[0]))
+    fig, axes = _map_grid(xf, yf, 2, 3, extra_w=0.6, extra_h=1.6, ylim=(yf[0], top))
+    # one colour scale per column, shared by its two rows: contact forces run to tens of particle weights
+    # where drag stays near one, so a common scale would hide the drag map
+    fcmap = matplotlib.colormaps[style.FORCE_COLOURMAP]
+    rcmap = matplotlib.colormaps[style.RATIO_COLOURMAP].with_extremes(under=style.NO_DRAG_COLOUR)
+    columns = [("contact_force", fcmap, "contact force / m g [–]"),
+               ("drag_force", fcmap, "gas force / m g [–]"),
+               ("force_ratio", rcmap, "contact / gas force [–]")]
+    # column heads on the top row; each row says when (Sun's figures: (a) instantaneous, (b) time-averaged)
+    heads = ("contact force / m g", "gas force / m g", "contact / gas force\n(grey: −1, no gas force)")
+    for c, (name, cmap, label) in enumerate(columns):
+        data = [getattr(m, name) for m in (inst, avg)]
+        top, over = _upper([np.where(d >= 0, d, np.nan) for d in data])  # the ratio's −1 is drawn grey
+        norm = Normalize(0.0, top)
+        for r, (maps, values) in enumerate(zip((inst, avg), data)):
+            when = (f"t = {maps.t1:.3g} s" if r == 0 else
+                    f"mean {maps.t0:.3g}–{maps.t1:.3g} s\n({maps.snapshots} snapshot{'s' if maps.snapshots != 1 else ''})")
+            mesh = axes[r, c].pcolormesh(xf, yf, values.T, cmap=cmap, norm=norm, shading="flat", rasterized=True)
+            axes[r, c].set_title(f"{heads[c]}\n{when}" if r == 0 else when)
+        extend = ("both" if over else "min") if name == "force_ratio" else ("max" if over else "neither")
+        fig.colorbar(mesh, ax=list(axes[:, c]), location="bottom", shrink=0.95, aspect=12, extend=extend, label=label)
     return fig

@@ -112,7 +112,7 @@ def build_report(run: RunData, options: PlotOptions | None = None) -> tuple[str,
                  + (f" · {e(str(desc))}" if desc else "") + "</p>")
 
     # published numbers first: the question a report of a seed case answers
-    rows = comparison_rows(run.case_name, summary)
+    rows = comparison_rows(run.case_name, summary, run.case)
     if rows:
         parts.append("<h2>Published results</h2>")
         diff = builtin_differences(run)
@@ -124,7 +124,7 @@ def build_report(run: RunData, options: PlotOptions | None = None) -> tuple[str,
             t = (summary or {}).get("sim_time_s")
             if end is not None and isinstance(t, (int, float)) and t < end * (1 - 1e-6):
                 notes.append(f"This run stopped at t = {t:.4g} s; the built-in case runs to {end:g} s, "
-                             "and the published values refer to its end state.")
+                             "and the published values are for a full run (its end state, or Sun's 5–10 s means).")
         for n in notes:
             parts.append(f'<p class="note">{e(n)}</p>')
         parts.append("<table><tr><th>quantity</th><th>published</th><th>this run</th></tr>")

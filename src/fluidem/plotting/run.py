@@ -85,6 +85,28 @@ class RunData:
         species = self.case.get("particles", {}).get("species", [])
         return [str(s.get("name", f"species {k}")) for k, s in enumerate(species)]
 
+    @property
+    def species_densities(self) -> np.ndarray:
+        """Material density [kg/m^3] of each species, (S,); raises ``Unavailable`` when case.toml lacks one."""
+        species = self.case.get("particles", {}).get("species", [])
+        try:
+            dens = np.array([float(s["density"]) for s in species], float)
+        except (KeyError, TypeError, ValueError):
+            raise Unavailable(f"{CASE_FILE} has a species without a density") from None
+        if dens.size == 0 or not np.all(np.isfinite(dens) & (dens > 0)):
+            raise Unavailable(f"{CASE_FILE} has no particle species with a density")
+        return dens
+
+    def particle_mass(self, diameter: np.ndarray, species: np.ndarray) -> np.ndarray:
+        """Mass [kg] of spheres of ``diameter`` [m] (N,) and ``species`` (N,): ρ_s π d³/6, as the engines
+        compute it (2D runs included). Raises ``Unavailable`` for a species index the case does not have."""
+        dens = self.species_densities
+        species = np.asarray(species, np.int64)
+        if species.size and (species.min() < 0 or species.max() >= dens.size):
+            raise Unavailable(f"a snapshot has species index {int(species.max())}, but {CASE_FILE} lists "
+                              f"{dens.size} species")
+        return dens[species] * np.pi / 6.0 * np.asarray(diameter, float) ** 3
+
     def boxes(self) -> list[dict]:
         """Box walls as dicts: ``lower`` [m] (3,), ``upper`` [m] (3,), ``open_top``, ``name``."""
         out = []
@@ -184,6 +206,30 @@ class RunData:
     def lacks_snapshots(self) -> str | None:
         return self._snapshot_index[1]
 
+    @cached_property
+    def snapshot_fields(self) -> tuple[str, ...]:
+        """Names of the datasets of the first snapshot (() without snapshots)."""
+        index, _ = self._snapshot_index
+        if not index:
+            return ()
+        try:
+            import h5py
+
+            with h5py.File(self.path / SNAPSHOT_FILE, "r") as f:
+                return tuple(f["snapshots"][index[0][0]])
+        except (OSError, KeyError, ValueError):
+            return ()
+
+    def lacks_snapshot_fields(self, *fields: str) -> str | None:
+        """Why the particle snapshots cannot give ``fields`` (None when they can)."""
+        why = self.lacks_snapshots()
+        if why is not None:
+            return why
+        missing = [f for f in fields if f not in self.snapshot_fields]
+        if missing:
+            return f"{SNAPSHOT_FILE} has no field {', '.join(missing)}"
+        return None
+
     @property
     def snapshot_times(self) -> np.ndarray:
         """Times [s] of the snapshots, in order; raises ``Unavailable``."""
@@ -219,17 +265,18 @@ class RunData:
         out["time"] = t
         return out
 
-    def iter_snapshots(self, fields: tuple[str, ...] = ("position",)):
-        """Yield (time [s], {field: array}) for every snapshot, opening the file once."""
+    def iter_snapshots(self, fields: tuple[str, ...] = ("position",), indices=None):
+        """Yield (time [s], {field: array}) for every snapshot (or those at ``indices``), opening the file once."""
         index, why = self._snapshot_index
         if index is None:
             raise Unavailable(why)
+        chosen = index if indices is None else [index[k] for k in indices]
         try:
             import h5py
 
             with h5py.File(self.path / SNAPSHOT_FILE, "r") as f:
                 grp = f["snapshots"]
-                for key, t in index:
+                for key, t in chosen:
                     g = grp[key]
                     yield t, {name: np.asarray(g[name]) for name in fields if name in g}
         except (OSError, KeyError, ValueError) as err:
@@ -275,6 +322,34 @@ class RunData:
         if data is None:
             raise Unavailable(why)
         return data
+
+    def gas_grid(self):
+        """The run's ``fluidem.gas.grid.StaggeredGrid``: from case.toml's ``[gas.grid]``, else from the
+        attributes of ``gas.h5``; raises ``Unavailable`` when neither gives it."""
+        from ..gas.grid import StaggeredGrid
+
+        spec = self.case.get("gas", {}).get("grid") if self.has_gas_phase else None
+        if isinstance(spec, dict) and "cells" in spec and "size" in spec:
+            try:
+                return StaggeredGrid(cells=tuple(spec["cells"]), size=tuple(spec["size"]),
+                                     depth=float(spec.get("depth", 1.0)))
+            except (CaseError, TypeError, ValueError):
+                pass
+        path = self.path / GAS_FILE
+        if path.is_file():
+            try:
+                import h5py
+
+                with h5py.File(path, "r") as f:
+                    a = f.attrs
+                    nx, ny = int(a["nx"]), int(a["ny"])
+                    return StaggeredGrid(cells=(nx, ny), size=(nx * float(a["dx"]), ny * float(a["dy"])),
+                                         depth=float(a.get("depth", 1.0)))
+            except (OSError, KeyError, ValueError, TypeError, CaseError):
+                pass
+        if not self.has_gas_phase:
+            raise Unavailable("the run has no gas phase (its case.toml has no [gas] section)")
+        raise Unavailable(f"neither {CASE_FILE} [gas.grid] nor {GAS_FILE} gives the gas grid")
 
     @property
     def gas_times(self) -> np.ndarray:

@@ -40,6 +40,12 @@ SPEED_COLOURMAP = "viridis"
 WALL_COLOUR = "#404040"
 VOIDAGE_COLOURMAP = "cividis"  # gas voidage maps: dense bed dark, bubbles and freeboard light
 SOLIDS_COLOURMAP = "magma_r"  # solids fraction maps: dense bed dark, freeboard white
+# N_c classes 0, 1, 2, 3, ≥4 (Sun et al. 2007 Figs 6/10): free particles pale, multicontacts warm.
+NC_COLOURS = ("#D9D9D9", "#56B4E9", "#009E73", "#E69F00", "#D55E00")
+NC_LABELS = ("N_c = 0", "N_c = 1", "N_c = 2", "N_c = 3", "N_c ≥ 4")  # contacting particles of a particle
+FORCE_COLOURMAP = "plasma"  # contact / gas force maps, scaled by the particle weight
+RATIO_COLOURMAP = "viridis"  # contact / gas force ratio maps
+NO_DRAG_COLOUR = "#BDBDBD"  # ratio −1: particles in the cell, no gas force on them
 MAP_PARTICLE_FACE = (1.0, 1.0, 1.0, 0.35)  # particles drawn over a gas map: translucent, so the map shows
 MAP_PARTICLE_EDGE = "#202020"
 
@@ -54,6 +60,10 @@ LABELS = {  # probe and summary columns with their names and units
     "contacts": "particle contacts [–]",
     "wall_contacts": "wall contacts [–]",
     "coordination": "coordination number [–]",
+    "multicontact_ratio": "multicontact ratio [–]",
+    "dissipated_normal_J": "dissipated energy, normal [J]",
+    "dissipated_tangential_J": "dissipated energy, tangential [J]",
+    "total_energy_J": "total energy [J]",
     "max_overlap_rel": "largest overlap / diameter [–]",
     "mean_bed_height_m": "mean particle height [m]",
     "bed_height_m": "bed height [m]",
@@ -64,7 +74,7 @@ LABELS = {  # probe and summary columns with their names and units
     "frequency_Hz": "frequency [Hz]",
 }
 UNIT_SUFFIXES = {"J": "J", "m": "m", "s": "s", "Pa": "Pa", "N": "N", "W": "W", "m_s": "m/s", "kg": "kg",
-                 "rel": "–", "per_s": "1/s", "Hz": "Hz"}
+                 "rel": "–", "per_s": "1/s", "Hz": "Hz", "m2": "m²"}
 
 
 def label(column: str) -> str:

@@ -28,12 +28,12 @@ def face_value(flux, q_mm, q_m, q_p, q_pp, scheme):
     next ones out. UPWIND: the donor value. TVD: q_C + ψ(r) (q_D − q_C) / 2 with
     r = (q_C − q_U) / (q_D − q_C) and the van Leer limiter ψ.
     """
-    if flux >= 0.0:
-        c, u, d = q_m, q_mm, q_p
-    else:
-        c, u, d = q_p, q_pp, q_m
+    pos = flux >= 0.0
+    c = q_m if pos else q_p  # selects, not branches: the sign of the flux is unpredictable
     if scheme == UPWIND:
         return c
+    u = q_mm if pos else q_pp
+    d = q_p if pos else q_m
     dd = d - c
     if dd == 0.0:
         return c
@@ -47,8 +47,8 @@ def normal_stresses_at_centre(U, V, E, mu, dx, dy, ci, cj):
     σ_xx = ε μ (2 ∂u/∂x − 2/3 ∇·u), σ_yy = ε μ (2 ∂v/∂y − 2/3 ∇·u); the sign is that of
     the stress acting on the gas (minus the τ_g of eq. 48).
     """
-    dudx = (U[ci + 3, cj + 2] - U[ci + 2, cj + 2]) / dx
-    dvdy = (V[ci + 2, cj + 3] - V[ci + 2, cj + 2]) / dy
+    dudx = (U[ci + 3, cj + 2] - U[ci + 2, cj + 2]) * (1.0 / dx)  # 1/dx: hoisted out of the callers' loops
+    dvdy = (V[ci + 2, cj + 3] - V[ci + 2, cj + 2]) * (1.0 / dy)
     em = E[ci + 1, cj + 1] * mu
     third = (2.0 / 3.0) * (dudx + dvdy)
     return em * (2.0 * dudx - third), em * (2.0 * dvdy - third)
@@ -60,8 +60,8 @@ def shear_stress_at_corner(U, V, E, mu, dx, dy, i, j):
 
     Hoomans 1996 eq. 48 (off-diagonal); ε is the mean of the four cells around the corner.
     """
-    dudy = (U[i + 2, j + 2] - U[i + 2, j + 1]) / dy
-    dvdx = (V[i + 2, j + 2] - V[i + 1, j + 2]) / dx
+    dudy = (U[i + 2, j + 2] - U[i + 2, j + 1]) * (1.0 / dy)
+    dvdx = (V[i + 2, j + 2] - V[i + 1, j + 2]) * (1.0 / dx)
     ec = 0.25 * (E[i, j] + E[i + 1, j] + E[i, j + 1] + E[i + 1, j + 1])
     return ec * mu * (dudy + dvdx)
 

@@ -20,12 +20,29 @@ et al. (1992) take donor-cell ερ because their solids voidage is transported w
 flow; here ε comes from the particles, and face means keep the continuity residual a
 smooth function of the pressure (donor switching made the Newton iteration cycle where
 voidage jumps between cells with almost no flow).
+
+Speed: on the small grids of coupled runs (15 × 45) a step costs a few tens of microseconds
+per kernel, and on the shared machines of this project the cost follows the chains of
+dependent operations more than the operation count. Hence the residual is gathered per cell
+from face fluxes (no read-after-write through memory), the band solve works on blocks of
+cells (dense mat-vecs, one dependent step per block), divisions by dx, dy are multiplications.
 """
 import numpy as np
 from numba import njit
 
-from ._operators import face_value, normal_stresses_at_centre, shear_stress_at_corner
-from .grid import FREE_SLIP, INFLOW, NO_SLIP, PERIODIC  # cell flags, Hoomans 1996 Table 1
+from ._operators import (
+    centre_to_x_faces,
+    centre_to_y_faces,
+    face_value,
+    normal_stresses_at_centre,
+    shear_stress_at_corner,
+)
+from .grid import (  # cell flags, Hoomans 1996 Table 1
+    FREE_SLIP,
+    INFLOW,
+    NO_SLIP,
+    PERIODIC,
+)
 
 # face kinds: momentum solved / value fixed (wall, inflow) / continuous outflow / periodic duplicate of face 0
 SOLVED, FIXED, OUTFLOW_FACE, COPY = 0, 1, 2, 3
@@ -152,32 +169,47 @@ def fill_face_ghosts(U, V, flags, nx, ny):
 
 
 # ---------------------------------------------------------------------------- stacked work arrays
-# The solver keeps its arrays in a few stacks (fewer kernel arguments compile much faster).
-# C  (7, nx + 2, ny + 2) centre arrays with one ring of boundary cells: gauge pressure, density,
-# voidage, prescribed gauge pressure at t + dt and at t, fixed voidage, (ερ) at t
-C_P, C_RHO, C_E, C_PFIX, C_PFIX_OLD, C_EFIX, C_RO_OLD = 0, 1, 2, 3, 4, 5, 6
-# FU (7, nx + 1, ny), FV (7, nx, ny + 1) face arrays without ghosts:
-F_OLD, F_EX, F_BETA, F_RHS, F_FIX, F_WOUT, F_D = 0, 1, 2, 3, 4, 5, 6
-# (velocity at t, explicit terms, β, β u_s + source, fixed value, outflow share, D = ε_f / a)
+# The solver keeps its arrays in a few stacks (fewer kernel arguments compile faster and dispatch faster).
+# C  (9, nx + 2, ny + 2) centre arrays with one ring of boundary cells: gauge pressure, density,
+# voidage, prescribed gauge pressure at t + dt and at t, fixed voidage, (ερ) at t, and the
+# normal stresses σ_xx, σ_yy of ε τ_g at t (work of ``explicit_momentum``)
+C_P, C_RHO, C_E, C_PFIX, C_PFIX_OLD, C_EFIX, C_RO_OLD, C_SXX, C_SYY = range(9)
+N_C = 9
+# FU (10, nx + 1, ny), FV (10, nx, ny + 1) face arrays without ghosts:
+F_OLD, F_EX, F_BETA, F_RHS, F_FIX, F_WOUT, F_FLUX, F_EF, F_X1, F_X2 = range(10)
+N_F = 10
+# (velocity at t, explicit terms, β, β u_s + source, fixed value, outflow share, mass flux A (ερ)_f w
+#  along +x / +y [kg/s], face voidage ε_f at t + dt, u_old/dt + g, explicit terms + β u_s + source)
 # KU (2, nx + 1, ny), KV (2, nx, ny + 1) int8: face kind and inward sign (+1 / -1 on boundary faces, else 0)
 K_KIND, K_SIGN = 0, 1
 # RULES (2, 9): ghost rule per flag for the pressure (row 0) and the voidage (row 1)
 RULE_P, RULE_E = 0, 1
-# VEC (3, nx ny): continuity residual R [kg/s], pressure correction p' [Pa], work
-V_R, V_DP, V_WORK = 0, 1, 2
+# VEC (5, nx ny): continuity residual R [kg/s], pressure correction p' [Pa], work vectors
+V_R, V_DP, V_WORK, V_WORK2, V_ROW = range(5)
+N_VEC = 6  # V_ROW: two rows
 # MAT (2, nnz): pressure matrix data (CSC), and the data of the matrix last factorised
 M_DATA, M_FACTORED = 0, 1
 # LUI (4, n + 1): L column pointers, U column pointers, perm_r, perm_c (SuperLU factors)
 L_LP, L_UP, L_PERM_R, L_PERM_C = 0, 1, 2, 3
 # fpar / ipar / out slots
 (F_GX, F_GY, F_DT, F_DX, F_DY, F_AX, F_AY, F_VOL, F_COMP, F_RHOC, F_TOL, F_REUSE, F_SLOW, F_PREF,
- F_MU) = range(15)
-(I_NX, I_NY, I_MAXIT, I_PIN, I_HAVE_LU, I_ITER, I_CHECKED, I_REFACTORED, I_RESUME, I_SCHEME, I_BANDED, I_BW,
- I_NFACT) = range(13)
+ F_MU, F_ETA) = range(16)
+N_FPAR = 16
+(I_NX, I_NY, I_MAXIT, I_PIN, I_HAVE_LU, I_ITER, I_CHECKED, I_REFACTORED, I_RESUME, I_SCHEME, I_SOLVER, I_BW,
+ I_NFACT, I_LEVELS, I_KRYLOV, I_KRYLOV_MAX, I_RESTART, I_PX, I_PY, I_BLOCKS) = range(20)
+N_IPAR = 20
 O_RES, O_QREF, O_IN, O_OUT, O_ACC, O_MASS, O_COURANT, O_REL, O_PREV = range(9)
+# linear solvers of the pressure correction (ipar[I_SOLVER])
+SOLVER_SUPERLU, SOLVER_BAND, SOLVER_MULTIGRID = 0, 1, 2
 # iterate status
 CONVERGED, NEED_FACTORS, MAX_ITERATIONS, NOT_FINITE = 0, 1, 2, 3
 MASS_FLOOR = 1e-4  # share of (gas mass / dt) in the reference flow of the mass residual
+BLOCK_REUSE = 0.3  # band: blocks whose rows changed by less than this share of F_REUSE keep their factors
+# modes of the step inputs (begin_step's ``modes``): not given / a number (at [0, 0]) / cell centres / faces
+IN_NONE, IN_SCALAR, IN_CENTRE, IN_FACE = 0, 1, 2, 3
+IN_VOIDAGE, IN_BETA, IN_SOLIDS_U, IN_SOLIDS_V, IN_SOURCE_U, IN_SOURCE_V = range(6)
+# begin_step status
+INPUT_OK, BAD_VOIDAGE, BAD_BETA = 0, 1, 2
 
 
 @njit(cache=True, error_model="numpy")
@@ -215,9 +247,14 @@ def update_density(C, rho_factor, rho_const, p_ref):
     """ρ = (p' + p_ref) M/(RT) everywhere (Hoomans 1996 eq. 44; C[C_P] is the pressure relative
     to p_ref), or the constant density when rho_factor is 0."""
     P, RHO = C[C_P], C[C_RHO]
-    for i in range(P.shape[0]):
-        for j in range(P.shape[1]):
-            RHO[i, j] = rho_factor * (P[i, j] + p_ref) if rho_factor != 0.0 else rho_const
+    if rho_factor != 0.0:
+        for i in range(P.shape[0]):
+            for j in range(P.shape[1]):
+                RHO[i, j] = rho_factor * (P[i, j] + p_ref)
+    else:
+        for i in range(P.shape[0]):
+            for j in range(P.shape[1]):
+                RHO[i, j] = rho_const
 
 
 @njit(cache=True, error_model="numpy")
@@ -228,6 +265,81 @@ def boundary_cells(C, pfix, flags, RULES, fpar, ipar):
     fill_centre_ghosts(C[C_E], flags, RULES[RULE_E], C[C_EFIX], nx, ny)
     fill_centre_ghosts(C[C_P], flags, RULES[RULE_P], pfix, nx, ny)
     update_density(C, fpar[F_COMP], fpar[F_RHOC], fpar[F_PREF])
+
+
+# ---------------------------------------------------------------------------- step inputs
+@njit(cache=True, error_model="numpy")
+def _to_faces(mode, q, periodic, axis, out):
+    """Face values ``out`` of an input given as a number (q[0, 0]), at centres or on faces."""
+    if mode == IN_SCALAR:
+        x = q[0, 0]
+        for i in range(out.shape[0]):
+            for j in range(out.shape[1]):
+                out[i, j] = x
+    elif mode == IN_CENTRE:
+        if axis == 0:
+            centre_to_x_faces(q, periodic, out)
+        else:
+            centre_to_y_faces(q, periodic, out)
+    elif mode == IN_FACE:
+        for i in range(out.shape[0]):
+            for j in range(out.shape[1]):
+                out[i, j] = q[i, j]
+    else:
+        for i in range(out.shape[0]):
+            for j in range(out.shape[1]):
+                out[i, j] = 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def _add_product(mode, q, periodic, axis, beta, rhs, work):
+    """rhs += beta * (the face values of the input q), or rhs += the face values when beta is empty."""
+    if mode == IN_NONE:
+        return
+    _to_faces(mode, q, periodic, axis, work)
+    if beta.shape[0] == 0:
+        for i in range(rhs.shape[0]):
+            for j in range(rhs.shape[1]):
+                rhs[i, j] += work[i, j]
+    else:
+        for i in range(rhs.shape[0]):
+            for j in range(rhs.shape[1]):
+                rhs[i, j] += beta[i, j] * work[i, j]
+
+
+@njit(cache=True, error_model="numpy")
+def load_inputs(eps_in, bu, bv, su, sv, qu, qv, modes, FU, FV, px, py):
+    """β, β u_s + source (FU/FV[F_BETA], [F_RHS]) from the step inputs (``modes`` per input, see
+    IN_*; a centre array is averaged onto the faces as ``centre_to_x_faces`` does) and the checks
+    of the new voidage (0 < ε ≤ 1) and of β (finite, ≥ 0). Returns INPUT_OK, BAD_VOIDAGE or BAD_BETA.
+    The solids velocity counts only where β is given."""
+    if modes[IN_VOIDAGE] != IN_NONE:
+        for i in range(eps_in.shape[0]):
+            for j in range(eps_in.shape[1]):
+                e = eps_in[i, j]
+                if not (e > 0.0 and e <= 1.0):
+                    return BAD_VOIDAGE
+    bmode = modes[IN_BETA]
+    _to_faces(bmode, bu, px, 0, FU[F_BETA])
+    _to_faces(bmode, bv, py, 1, FV[F_BETA])
+    for F in (FU, FV):
+        beta = F[F_BETA]
+        for i in range(beta.shape[0]):
+            for j in range(beta.shape[1]):
+                x = beta[i, j]
+                if not (x >= 0.0 and x < np.inf):
+                    return BAD_BETA
+        rhs = F[F_RHS]
+        for i in range(rhs.shape[0]):
+            for j in range(rhs.shape[1]):
+                rhs[i, j] = 0.0
+    none = FU[F_BETA, :0]
+    if bmode != IN_NONE:
+        _add_product(modes[IN_SOLIDS_U], su, px, 0, FU[F_BETA], FU[F_RHS], FU[F_WOUT])
+        _add_product(modes[IN_SOLIDS_V], sv, py, 1, FV[F_BETA], FV[F_RHS], FV[F_WOUT])
+    _add_product(modes[IN_SOURCE_U], qu, px, 0, none, FU[F_RHS], FU[F_WOUT])
+    _add_product(modes[IN_SOURCE_V], qv, py, 1, FV[F_BETA, :0], FV[F_RHS], FV[F_WOUT])
+    return INPUT_OK
 
 
 # ---------------------------------------------------------------------------- explicit terms
@@ -261,11 +373,30 @@ def mass_fluxes(U, V, E, RHO, G, H, KU, KV, flags, nx, ny):
 
 
 @njit(cache=True, error_model="numpy")
-def explicit_momentum(U, V, G, H, E, mu, dx, dy, scheme, ukind, vkind, exu, exv, nx, ny):
+def _stresses(U, V, E, mu, dx, dy, SXX, SYY, TAU, nx, ny):
+    """The stresses of ε τ_g that ``explicit_momentum`` differences, each computed once:
+    σ_xx at centres (ci, cj), ci = -1..nx, cj = 0..ny-1 and σ_yy at ci = 0..nx-1, cj = -1..ny,
+    stored at [ci + 1, cj + 1]; the shear stress at every corner (i, j), i = 0..nx, j = 0..ny."""
+    for ci in range(-1, nx + 1):
+        for cj in range(-1, ny + 1):
+            if (ci < 0 or ci >= nx) and (cj < 0 or cj >= ny):
+                continue
+            sxx, syy = normal_stresses_at_centre(U, V, E, mu, dx, dy, ci, cj)
+            SXX[ci + 1, cj + 1] = sxx
+            SYY[ci + 1, cj + 1] = syy
+    for i in range(nx + 1):
+        for j in range(ny + 1):
+            TAU[i, j] = shear_stress_at_corner(U, V, E, mu, dx, dy, i, j)
+
+
+@njit(cache=True, error_model="numpy")
+def explicit_momentum(U, V, G, H, E, mu, dx, dy, scheme, ukind, vkind, exu, exv, nx, ny, SXX, SYY, TAU):
     """Explicit part of the momentum balance (Hoomans 1996 eq. 43) on every solved face [N m^-3]:
     exu = −[∇·(ερ u u) − u ∇·(ερ u)] − ∇·(ε τ_g), the convection in advective form (the mass
     fluxes G, H of the continuity equation; face velocities by ``scheme``) and the viscous
-    stress of eq. 48 (λ_g = 0)."""
+    stress of eq. 48 (λ_g = 0); SXX, SYY (centre), TAU (corner) are work arrays for the stresses."""
+    _stresses(U, V, E, mu, dx, dy, SXX, SYY, TAU, nx, ny)
+    idx, idy = 1.0 / dx, 1.0 / dy
     for i in range(nx + 1):
         for j in range(ny):
             if ukind[i, j] != SOLVED:
@@ -281,12 +412,8 @@ def explicit_momentum(U, V, G, H, E, mu, dx, dy, scheme, ukind, vkind, exu, exv,
             uw = face_value(fw, U[I - 2, J], U[I - 1, J], up, U[I + 1, J], scheme)
             un = face_value(fn, U[I, J - 1], up, U[I, J + 1], U[I, J + 2], scheme)
             us = face_value(fs, U[I, J - 2], U[I, J - 1], up, U[I, J + 1], scheme)
-            adv = (fe * (ue - up) - fw * (uw - up)) / dx + (fn * (un - up) - fs * (us - up)) / dy
-            sxx_l, _ = normal_stresses_at_centre(U, V, E, mu, dx, dy, i - 1, j)
-            sxx_r, _ = normal_stresses_at_centre(U, V, E, mu, dx, dy, i, j)
-            tn = shear_stress_at_corner(U, V, E, mu, dx, dy, i, j + 1)
-            ts = shear_stress_at_corner(U, V, E, mu, dx, dy, i, j)
-            exu[i, j] = -adv + (sxx_r - sxx_l) / dx + (tn - ts) / dy
+            adv = (fe * (ue - up) - fw * (uw - up)) * idx + (fn * (un - up) - fs * (us - up)) * idy
+            exu[i, j] = -adv + (SXX[i + 1, j + 1] - SXX[i, j + 1]) * idx + (TAU[i, j + 1] - TAU[i, j]) * idy
     for i in range(nx):
         for j in range(ny + 1):
             if vkind[i, j] != SOLVED:
@@ -302,12 +429,8 @@ def explicit_momentum(U, V, G, H, E, mu, dx, dy, scheme, ukind, vkind, exu, exv,
             vs = face_value(fs, V[I, J - 2], V[I, J - 1], vp, V[I, J + 1], scheme)
             ve = face_value(fe, V[I - 1, J], vp, V[I + 1, J], V[I + 2, J], scheme)
             vw = face_value(fw, V[I - 2, J], V[I - 1, J], vp, V[I + 1, J], scheme)
-            adv = (fn * (vn - vp) - fs * (vs - vp)) / dy + (fe * (ve - vp) - fw * (vw - vp)) / dx
-            _, syy_s = normal_stresses_at_centre(U, V, E, mu, dx, dy, i, j - 1)
-            _, syy_n = normal_stresses_at_centre(U, V, E, mu, dx, dy, i, j)
-            te = shear_stress_at_corner(U, V, E, mu, dx, dy, i + 1, j)
-            tw = shear_stress_at_corner(U, V, E, mu, dx, dy, i, j)
-            exv[i, j] = -adv + (syy_n - syy_s) / dy + (te - tw) / dx
+            adv = (fn * (vn - vp) - fs * (vs - vp)) * idy + (fe * (ve - vp) - fw * (vw - vp)) * idx
+            exv[i, j] = -adv + (SYY[i + 1, j + 1] - SYY[i + 1, j]) * idy + (TAU[i + 1, j] - TAU[i, j]) * idx
 
 
 @njit(cache=True, error_model="numpy")
@@ -344,10 +467,29 @@ def _normalise_shares(F, K, area, total):
 
 
 @njit(cache=True, error_model="numpy")
-def begin_step(p, rho, u, v, eps_old, eps_new, U, V, G, H, C, FU, FV, KU, KV, flags, RULES, fpar, ipar):
+def _face_constants(C, F, K, gravity, idt):
+    """Per step, on the faces of one direction: ε_f at t + dt (``face_voidage``), X1 = u_old/dt + g,
+    X2 = explicit terms + β u_s + source."""
+    E = C[C_E]
+    kind, sign = K[K_KIND], K[K_SIGN]
+    EF, X1, X2, old, ex, rhs = F[F_EF], F[F_X1], F[F_X2], F[F_OLD], F[F_EX], F[F_RHS]
+    da, db = face_axis(E, K)
+    for i in range(kind.shape[0]):
+        for j in range(kind.shape[1]):
+            k = kind[i, j]
+            la, lb, ra, rb = i + 1 - da, j + 1 - db, i + 1, j + 1
+            EF[i, j] = face_voidage(E, la, lb, ra, rb, k, sign[i, j])
+            X1[i, j] = old[i, j] * idt + gravity
+            X2[i, j] = ex[i, j] + rhs[i, j]
+
+
+@njit(cache=True, error_model="numpy")
+def begin_step(p, rho, u, v, eps_old, eps_new, U, V, G, H, C, FU, FV, KU, KV, flags, RULES, fpar, ipar, TAU):
     """Load the state at t (p, rho, u, v, eps_old; p as gauge pressure), fill its ghosts, its
     mass fluxes and the explicit momentum terms FU[F_EX], FV[F_EX]; the shares of the
-    continuous outflow; then the new voidage and the boundary cells at t + dt."""
+    continuous outflow; then the new voidage (``eps_new``, (nx, ny)) and the boundary cells at
+    t + dt, and the per-step face constants. FU/FV[F_BETA] and [F_RHS] must hold this step's
+    β and β u_s + source (``load_inputs``)."""
     nx, ny = ipar[I_NX], ipar[I_NY]
     p_ref = fpar[F_PREF]
     P, E, RO = C[C_P], C[C_E], C[C_RO_OLD]
@@ -364,7 +506,7 @@ def begin_step(p, rho, u, v, eps_old, eps_new, U, V, G, H, C, FU, FV, KU, KV, fl
     fill_face_ghosts(U, V, flags, nx, ny)
     mass_fluxes(U, V, E, C[C_RHO], G, H, KU, KV, flags, nx, ny)
     explicit_momentum(U, V, G, H, E, fpar[F_MU], fpar[F_DX], fpar[F_DY], ipar[I_SCHEME], KU[K_KIND],
-                      KV[K_KIND], FU[F_EX], FV[F_EX], nx, ny)
+                      KV[K_KIND], FU[F_EX], FV[F_EX], nx, ny, C[C_SXX], C[C_SYY], TAU)
     total = np.zeros(3)
     _outflow_shares(FU, KU, C, fpar[F_AX], total)
     _outflow_shares(FV, KV, C, fpar[F_AY], total)
@@ -375,98 +517,109 @@ def begin_step(p, rho, u, v, eps_old, eps_new, U, V, G, H, C, FU, FV, KU, KV, fl
         for j in range(ny):
             E[i + 1, j + 1] = eps_new[i, j]
     boundary_cells(C, C[C_PFIX], flags, RULES, fpar, ipar)
+    idt = 1.0 / fpar[F_DT]
+    _face_constants(C, FU, KU, fpar[F_GX], idt)
+    _face_constants(C, FV, KV, fpar[F_GY], idt)
 
 
 @njit(cache=True, error_model="numpy")
-def finite_nonnegative(a, b):
-    """True when every value of the 2D arrays a and b is finite and >= 0."""
-    for q in (a, b):
-        for i in range(q.shape[0]):
-            for j in range(q.shape[1]):
-                x = q[i, j]
-                if not (x >= 0.0 and x < np.inf):
-                    return False
-    return True
+def start_step(dt, p, rho, u, v, eps_old, eps_new, bu, bv, su, sv, qu, qv, modes, U, V, G, H, C, FU, FV, KU, KV,
+               flags, RULES, fpar, ipar, out, TAU):
+    """``load_inputs`` (returns its status when an input is out of range), then ``begin_step`` for
+    a step of ``dt``, and the counters of ``iterate`` reset: one call per step."""
+    status = load_inputs(eps_new, bu, bv, su, sv, qu, qv, modes, FU, FV, ipar[I_PX] != 0, ipar[I_PY] != 0)
+    if status != INPUT_OK:
+        return status
+    fpar[F_DT] = dt
+    begin_step(p, rho, u, v, eps_old, eps_new, U, V, G, H, C, FU, FV, KU, KV, flags, RULES, fpar, ipar, TAU)
+    ipar[I_ITER] = 0
+    ipar[I_CHECKED] = 0
+    ipar[I_REFACTORED] = 0
+    ipar[I_RESUME] = 0
+    out[O_PREV] = np.inf
+    return INPUT_OK
 
 
 @njit(cache=True, error_model="numpy")
-def end_step(p, rho, u, v, U, V, C, p_ref):
-    """Write the fields at t + dt back into the state arrays (p as absolute pressure)."""
+def end_step(p, rho, u, v, U, V, C, p_ref, eps, eps_new):
+    """Write the fields at t + dt back into the state arrays (p as absolute pressure, ε = eps_new)."""
     nx, ny = p.shape
     P, RHO = C[C_P], C[C_RHO]
     for i in range(nx):
         for j in range(ny):
             p[i, j] = P[i + 1, j + 1] + p_ref
             rho[i, j] = RHO[i + 1, j + 1]
+            eps[i, j] = eps_new[i, j]
     copy_from(u, U)
     copy_from(v, V)
 
 
 # ---------------------------------------------------------------------------- one iteration
 @njit(cache=True, error_model="numpy")
-def _predict(W, C, F, K, gravity, dt, h):
-    """Momentum on the faces of one direction (x-faces: W = U, F = FU; y-faces: V, FV)."""
-    P, RHO, E = C[C_P], C[C_RHO], C[C_E]
+def _face_fluxes(W, C, F, K, idt, ih, area):
+    """Momentum of the faces of one direction (x-faces: W = U, F = FU; y-faces: V, FV) at the
+    current pressure, and their mass fluxes A (ερ)_f w along +x (+y) [kg/s] into F[F_FLUX]:
+    0 on outflow faces (``_outflow`` adds theirs), periodic duplicates those of face 0.
+    Returns whether there are outflow faces."""
+    P, RHO = C[C_P], C[C_RHO]
     kind = K[K_KIND]
-    old, ex, beta, rhs, fix, D = F[F_OLD], F[F_EX], F[F_BETA], F[F_RHS], F[F_FIX], F[F_D]
+    EF, X1, X2, beta, fix, FL = F[F_EF], F[F_X1], F[F_X2], F[F_BETA], F[F_FIX], F[F_FLUX]
+    has_outflow = False
     da, db = face_axis(P, K)
-    for i in range(kind.shape[0]):
-        for j in range(kind.shape[1]):
+    n1, n2 = kind.shape[0], kind.shape[1]
+    for i in range(n1):
+        for j in range(n2):
             k = kind[i, j]
+            la, lb, ra, rb = i + 1 - da, j + 1 - db, i + 1, j + 1
             if k == SOLVED:
-                la, lb, ra, rb = i + 1 - da, j + 1 - db, i + 1, j + 1
-                ef = 0.5 * (E[la, lb] + E[ra, rb])
-                m = ef * 0.5 * (RHO[la, lb] + RHO[ra, rb])
-                a = m / dt + beta[i, j]
-                d = ef / a
-                D[i, j] = d
-                W[i + 2, j + 2] = (m * old[i, j] / dt + ex[i, j] + m * gravity + rhs[i, j]) / a \
-                    - d * (P[ra, rb] - P[la, lb]) / h
+                rf = 0.5 * (RHO[la, lb] + RHO[ra, rb])
+                ef = EF[i, j]
+                m = ef * rf
+                a = m * idt + beta[i, j]
+                w = (m * X1[i, j] + X2[i, j] - ef * (P[ra, rb] - P[la, lb]) * ih) / a
+                W[i + 2, j + 2] = w
+                FL[i, j] = area * ef * rf * w
             elif k == FIXED:
-                D[i, j] = 0.0
-                W[i + 2, j + 2] = fix[i, j]
-            else:
-                D[i, j] = 0.0
+                w = fix[i, j]
+                W[i + 2, j + 2] = w
+                FL[i, j] = area * EF[i, j] * 0.5 * (RHO[la, lb] + RHO[ra, rb]) * w
+            elif k == OUTFLOW_FACE:
+                FL[i, j] = 0.0
+                has_outflow = True
+    if da == 1:
+        for j in range(n2):
+            if kind[n1 - 1, j] == COPY:
+                FL[n1 - 1, j] = FL[0, j]
+    else:
+        for i in range(n1):
+            if kind[i, n2 - 1] == COPY:
+                FL[i, n2 - 1] = FL[i, 0]
+    return has_outflow
 
 
 @njit(cache=True, error_model="numpy")
-def _fluxes(W, C, K, row_of, R, area):
-    """Add the mass flux A (ερ)_f w of every face of one direction, except outflow faces and
-    periodic duplicates, to the residuals of the cells either side. Returns (inflow, outflow,
-    net inflow, has outflow faces) through the boundary faces of this direction [kg/s]."""
-    RHO, E = C[C_RHO], C[C_E]
-    kind, sign = K[K_KIND], K[K_SIGN]
+def _boundary_flows(F, K):
+    """(inflow, outflow, net inflow) [kg/s] through the boundary faces of one direction (F[F_FLUX])."""
+    kind, sign, FL = K[K_KIND], K[K_SIGN], F[F_FLUX]
     inflow = 0.0
     outflow = 0.0
     net_in = 0.0
-    has_outflow = False
-    da, db = face_axis(E, K)
-    for i in range(kind.shape[0]):
-        for j in range(kind.shape[1]):
-            k = kind[i, j]
-            if k == COPY:
+    n1, n2 = kind.shape[0], kind.shape[1]
+    for i in range(n1):
+        for j in range(n2):
+            if i != 0 and i != n1 - 1 and j != 0 and j != n2 - 1:
                 continue
-            if k == OUTFLOW_FACE:
-                has_outflow = True
-                continue
-            la, lb, ra, rb = i + 1 - da, j + 1 - db, i + 1, j + 1
-            w = W[i + 2, j + 2]
-            f = area * face_voidage(E, la, lb, ra, rb, k, sign[i, j]) * 0.5 * (RHO[la, lb] + RHO[ra, rb]) * w
-            rl = row_of[la, lb]
-            rr = row_of[ra, rb]
-            if rl >= 0:
-                R[rl] += f
-            if rr >= 0:
-                R[rr] -= f
             s = sign[i, j]
-            if s != 0:
-                fin = s * f
-                net_in += fin
-                if fin > 0.0:
-                    inflow += fin
-                else:
-                    outflow -= fin
-    return inflow, outflow, net_in, has_outflow
+            k = kind[i, j]
+            if s == 0 or k == COPY or k == OUTFLOW_FACE:
+                continue
+            fin = s * FL[i, j]
+            net_in += fin
+            if fin > 0.0:
+                inflow += fin
+            else:
+                outflow -= fin
+    return inflow, outflow, net_in
 
 
 @njit(cache=True, error_model="numpy")
@@ -502,7 +655,7 @@ def _outflow(W, C, F, K, row_of, R, area, need):
 
 
 @njit(cache=True, error_model="numpy")
-def predict_residual(U, V, C, FU, FV, KU, KV, row_of, flags, R, fpar, ipar):
+def predict_residual(U, V, C, FU, FV, KU, KV, row_of, R, fpar, ipar):
     """Face velocities from the momentum balance at the current pressure, then the cell
     continuity residuals (Hoomans 1996 eqs 42-43).
 
@@ -516,26 +669,30 @@ def predict_residual(U, V, C, FU, FV, KU, KV, row_of, flags, R, fpar, ipar):
         R_c = V [(ερ)_c - (ερ)_c,old]/dt + Σ_faces A (ερ)_f u_out
 
     Outflow faces carry F_WOUT × the outflow that closes the mass balance. Returns
-    (Σ|R|, reference flow, inflow, outflow, accumulation, mass, Courant number).
+    (Σ|R|, reference flow, inflow, outflow, accumulation, mass). Ghost faces are not filled.
     """
     nx, ny = ipar[I_NX], ipar[I_NY]
-    dt, dx, dy, vol = fpar[F_DT], fpar[F_DX], fpar[F_DY], fpar[F_VOL]
-    _predict(U, C, FU, KU, fpar[F_GX], dt, dx)
-    _predict(V, C, FV, KV, fpar[F_GY], dt, dy)
+    dt, vol = fpar[F_DT], fpar[F_VOL]
+    idt = 1.0 / dt
     RHO, E, RO = C[C_RHO], C[C_E], C[C_RO_OLD]
+    of_x = _face_fluxes(U, C, FU, KU, idt, 1.0 / fpar[F_DX], fpar[F_AX])
+    of_y = _face_fluxes(V, C, FV, KV, idt, 1.0 / fpar[F_DY], fpar[F_AY])
+    FLU, FLV = FU[F_FLUX], FV[F_FLUX]
     acc = 0.0
     acc_abs = 0.0
     mass = 0.0
+    vdt = vol * idt
     for i in range(nx):
         for j in range(ny):
             er = E[i + 1, j + 1] * RHO[i + 1, j + 1]
-            a = vol * (er - RO[i + 1, j + 1]) / dt
-            R[i * ny + j] = a
+            a = vdt * (er - RO[i + 1, j + 1])
+            R[i * ny + j] = a + ((FLU[i + 1, j] - FLU[i, j]) + (FLV[i, j + 1] - FLV[i, j]))
             acc += a
             acc_abs += abs(a)
-            mass += vol * er
-    in_x, out_x, net_x, of_x = _fluxes(U, C, KU, row_of, R, fpar[F_AX])
-    in_y, out_y, net_y, of_y = _fluxes(V, C, KV, row_of, R, fpar[F_AY])
+            mass += er
+    mass *= vol
+    in_x, out_x, net_x = _boundary_flows(FU, KU)
+    in_y, out_y, net_y = _boundary_flows(FV, KV)
     inflow = in_x + in_y
     outflow = out_x + out_y
     if of_x or of_y:
@@ -544,10 +701,17 @@ def predict_residual(U, V, C, FU, FV, KU, KV, row_of, flags, R, fpar, ipar):
         c, d = _outflow(V, C, FV, KV, row_of, R, fpar[F_AY], need)
         inflow += a + c
         outflow += b + d
-    fill_face_ghosts(U, V, flags, nx, ny)
     res = 0.0
     for k in range(nx * ny):
         res += abs(R[k])
+    qref = inflow + outflow + acc_abs + MASS_FLOOR * mass * idt
+    return res, qref, inflow, outflow, acc, mass
+
+
+@njit(cache=True, error_model="numpy")
+def courant_number(U, V, fpar, ipar):
+    """max|u| dt/dx + max|v| dt/dy over the faces [-]."""
+    nx, ny = ipar[I_NX], ipar[I_NY]
     umax = 0.0
     for i in range(nx + 1):
         for j in range(ny):
@@ -556,17 +720,18 @@ def predict_residual(U, V, C, FU, FV, KU, KV, row_of, flags, R, fpar, ipar):
     for i in range(nx):
         for j in range(ny + 1):
             vmax = max(vmax, abs(V[i + 2, j + 2]))
-    qref = inflow + outflow + acc_abs + MASS_FLOOR * mass / dt
-    return res, qref, inflow, outflow, acc, mass, umax * dt / dx + vmax * dt / dy
+    dt = fpar[F_DT]
+    return umax * dt / fpar[F_DX] + vmax * dt / fpar[F_DY]
 
 
 # ---------------------------------------------------------------------------- pressure correction
 @njit(cache=True, error_model="numpy")
-def _assemble_faces(data, pos, W, C, F, K, area, h, comp):
+def _assemble_faces(data, pos, W, C, F, K, area, h, comp, idt):
     """Face terms of the pressure matrix for one direction (see ``assemble_pressure``)."""
-    RHO, E = C[C_RHO], C[C_E]
-    kind, sign, D = K[K_KIND], K[K_SIGN], F[F_D]
-    da, db = face_axis(E, K)
+    RHO = C[C_RHO]
+    kind, EF, beta, X1 = K[K_KIND], F[F_EF], F[F_BETA], F[F_X1]
+    da, db = face_axis(RHO, K)
+    half_comp = 0.5 * comp
     for i in range(kind.shape[0]):
         for j in range(kind.shape[1]):
             k = kind[i, j]
@@ -574,9 +739,16 @@ def _assemble_faces(data, pos, W, C, F, K, area, h, comp):
                 continue
             la, lb, ra, rb = i + 1 - da, j + 1 - db, i + 1, j + 1
             w = W[i + 2, j + 2]
-            ef = face_voidage(E, la, lb, ra, rb, k, sign[i, j])
-            c = area * ef * 0.5 * (RHO[la, lb] + RHO[ra, rb]) * D[i, j] / h
-            t = 0.5 * area * ef * w * comp  # d(flux)/dp of either cell through ρ_f = (ρ_L + ρ_R)/2
+            ef = EF[i, j]
+            rf = 0.5 * (RHO[la, lb] + RHO[ra, rb])
+            base = area * ef * rf
+            d = ef / (ef * rf * idt + beta[i, j]) if k == SOLVED else 0.0  # D = ε_f / a
+            c = base * d / h
+            # d(flux)/dp of either cell through ρ_f = (ρ_L + ρ_R)/2, in the flux and (solved faces)
+            # in the inertia (ερ)_f of the face velocity: du/dρ_f = ε_f ((u_old - u)/dt + g) / a
+            t = area * ef * w * half_comp
+            if k == SOLVED and comp != 0.0:
+                t += base * d * half_comp * (X1[i, j] - w * idt)
             # flux out of L: (c + t) p'_L + (t - c) p'_R ; out of R: the negative
             p_ll, p_lr, p_rl, p_rr = pos[i, j, 0], pos[i, j, 1], pos[i, j, 2], pos[i, j, 3]
             if p_ll >= 0:
@@ -592,12 +764,13 @@ def _assemble_faces(data, pos, W, C, F, K, area, h, comp):
 @njit(cache=True, error_model="numpy")
 def assemble_pressure(data, diag_pos, upos, vpos, pin_pos, U, V, C, FU, FV, KU, KV, fpar, ipar):
     """Matrix of the pressure correction p' (CSC ``data`` of a fixed pattern): the Newton
-    derivative of the continuity residuals R_c with respect to the cell pressures.
+    derivative (Jacobian) of the continuity residuals R_c with respect to the cell pressures.
 
     Terms: compressibility ε V comp / dt on the diagonal (comp = M/(RT), 0 for constant
     density; Hoomans 1996 eq. 44), A (ερ)_f D / h between the two cells of each solved
-    face, and A ε_f u comp / 2 per cell from the face density (ρ_L + ρ_R)/2 of every face
-    with flow.
+    face, and per cell, through the face density (ρ_L + ρ_R)/2 of every face with flow,
+    A ε_f u comp / 2 (the density in the flux) plus, on solved faces, A (ερ)_f D comp/2
+    ((u_old - u)/dt + g) (the density in the inertia of the face momentum).
     ``upos[i, j]`` holds the positions of (row L, col L), (row L, col R), (row R, col L),
     (row R, col R), −1 where a row or column does not exist. ``pin_pos``: positions of
     row 0, replaced by p'_0 = 0 (constant-density gas without a pressure boundary).
@@ -611,8 +784,8 @@ def assemble_pressure(data, diag_pos, upos, vpos, pin_pos, U, V, C, FU, FV, KU, 
         for i in range(nx):
             for j in range(ny):
                 data[diag_pos[i * ny + j]] += comp * E[i + 1, j + 1] * vol / dt
-    _assemble_faces(data, upos, U, C, FU, KU, fpar[F_AX], fpar[F_DX], comp)
-    _assemble_faces(data, vpos, V, C, FV, KV, fpar[F_AY], fpar[F_DY], comp)
+    _assemble_faces(data, upos, U, C, FU, KU, fpar[F_AX], fpar[F_DX], comp, 1.0 / dt)
+    _assemble_faces(data, vpos, V, C, FV, KV, fpar[F_AY], fpar[F_DY], comp, 1.0 / dt)
     if pin_diag >= 0:
         for p in pin_pos:
             data[p] = 0.0
@@ -642,79 +815,492 @@ def lu_solve(LUI, Li, Lx, Ui, Ux, Ud, b, x, w):
         x[i] = w[perm_c[i]]
 
 
+# ---------------------------------------------------------------------------- block-tridiagonal LU ("band")
+# With the unknowns numbered along one grid direction first (m = its number of cells, the band
+# half-width), the 5-point matrix is block tridiagonal: nb = n / m dense diagonal blocks D_j (m × m,
+# tridiagonal, plus corners for a periodic direction) and diagonal couplings lo_j, up_j to the
+# blocks before and after. Block LU: S_0 = D_0, S_j = D_j - diag(lo_j) S_{j-1}^-1 diag(up_{j-1});
+# the inverses S_j^-1 are kept, so that a solve is 2 nb dense mat-vecs (one dependent step per
+# block instead of one per unknown):
+#     y_j = S_j^-1 (b_j - lo_j ∘ y_{j-1}),   x_j = y_j - S_j^-1 (up_j ∘ x_{j+1})
+# BINV (nb, m, m) holds S_j^-1 transposed (BINV[j, c, r] = (S_j^-1)[r, c]); BLU (2, nb, m) lo and up.
 @njit(cache=True, error_model="numpy")
-def band_factor(data, indices, indptr, order, bw, B):
-    """LU factors, without pivoting, of the CSC matrix (data, indices, indptr) with rows and
-    columns renumbered by ``order`` into a band of half-width ``bw``: B (n, 2 bw + 1) with
-    B[i, j − i + bw] = A[i, j]; L below the diagonal (unit diagonal), U on and above.
+def _pivot(A, k, rows, r0, r1):
+    """Gauss-Jordan step of pivot k on the rows r0 <= r < r1 of A, row k taken from ``rows``."""
+    m = A.shape[0]
+    for r in range(r0, r1):
+        Ar = A[r]
+        f = Ar[k]
+        if f != 0.0:
+            Ar[k] = 0.0
+            for c in range(m):
+                Ar[c] -= f * rows[c]
 
-    Safe without pivoting because the pressure matrix is diagonally dominant; returns the
-    smallest |pivot| relative to the largest |diagonal| so that the caller can check.
-    """
-    n = B.shape[0]
-    for i in range(n):
-        for j in range(B.shape[1]):
-            B[i, j] = 0.0
+
+@njit(cache=True, error_model="numpy")
+def _invert_in_place(A, rows):
+    """A^-1 in place by Gauss-Jordan elimination without pivoting (A diagonally dominant), the
+    pivots taken two at a time so that every other row is updated in one pass; ``rows`` (2, ≥ m)
+    is work. Returns the smallest |pivot|, 0 if one vanished."""
+    m = A.shape[0]
+    pmin = np.inf
+    a, b = rows[0], rows[1]
+    k = 0
+    while k < m:
+        two = k + 1 < m
+        for q in range(2 if two else 1):  # eliminate inside the pair of rows k, k + 1
+            kk = k + q
+            Aq = A[kk]
+            piv = Aq[kk]
+            pmin = min(pmin, abs(piv))
+            if piv == 0.0:
+                return 0.0
+            inv = 1.0 / piv
+            Aq[kk] = 1.0
+            for c in range(m):
+                Aq[c] *= inv
+            if two:
+                Ao = A[k + 1 - q]
+                f = Ao[kk]
+                Ao[kk] = 0.0
+                for c in range(m):
+                    Ao[c] -= f * Aq[c]
+        if not two:
+            for c in range(m):
+                a[c] = A[k, c]
+            _pivot(A, k, a, 0, k)
+            break
+        for c in range(m):
+            a[c] = A[k, c]
+            b[c] = A[k + 1, c]
+        for r in range(m):
+            if r == k or r == k + 1:
+                continue
+            Ar = A[r]
+            f0 = Ar[k]
+            f1 = Ar[k + 1]
+            Ar[k] = 0.0
+            Ar[k + 1] = 0.0
+            for c in range(m):
+                Ar[c] -= f0 * a[c] + f1 * b[c]
+        k += 2
+    return pmin
+
+
+@njit(cache=True, error_model="numpy")
+def band_factor(data, indices, indptr, order, BINV, BLU, rows, j0):
+    """Block-tridiagonal LU (see above) of the CSC matrix (data, indices, indptr) with rows and
+    columns renumbered by ``order``, from block ``j0`` on (the blocks before it keep their
+    factors: the recursion runs in block order); ``row`` is work (≥ m). Without pivoting, as the
+    pressure matrix is diagonally dominant; returns the smallest |pivot| relative to the largest
+    |diagonal| so that the caller can check (0 when the matrix is not block tridiagonal in this
+    numbering)."""
+    nb, m = BINV.shape[0], BINV.shape[1]
+    n = nb * m
+    lo, up = BLU[0], BLU[1]
+    for jb in range(j0, nb):
+        for a in range(m):
+            lo[jb, a] = 0.0
+            up[jb, a] = 0.0
+            for b in range(m):
+                BINV[jb, a, b] = 0.0
     for col in range(n):
         c = order[col]
+        jc = c // m
+        ic = c - jc * m
         for q in range(indptr[col], indptr[col + 1]):
             r = order[indices[q]]
-            B[r, c - r + bw] += data[q]
-    dmax = 0.0
-    for i in range(n):
-        dmax = max(dmax, abs(B[i, bw]))
-    pmin = np.inf
-    for k in range(n):
-        piv = B[k, bw]
-        pmin = min(pmin, abs(piv))
-        if piv == 0.0:
-            return 0.0
-        last = min(k + bw, n - 1)
-        for i in range(k + 1, last + 1):
-            lik = B[i, k - i + bw]
-            if lik == 0.0:
+            jr = r // m
+            if jr < j0:
                 continue
-            lik /= piv
-            B[i, k - i + bw] = lik
-            for j in range(k + 1, last + 1):
-                B[i, j - i + bw] -= lik * B[k, j - k + bw]
+            ir = r - jr * m
+            if jr == jc:
+                BINV[jr, ic, ir] += data[q]  # the transposed block: inv(Sᵀ) = inv(S)ᵀ
+            elif jc == jr - 1 and ic == ir:
+                lo[jr, ir] += data[q]
+            elif jc == jr + 1 and ic == ir:
+                up[jr, ir] += data[q]
+            else:
+                return 0.0
+    dmax = 0.0
+    for jb in range(j0, nb):
+        for a in range(m):
+            dmax = max(dmax, abs(BINV[jb, a, a]))
+    pmin = np.inf
+    for jb in range(j0, nb):
+        St = BINV[jb]
+        if jb > 0:  # Sᵀ[b, a] -= up_{j-1}[b] (S_{j-1}^-1)ᵀ[b, a] lo_j[a]
+            Pt = BINV[jb - 1]
+            for b in range(m):
+                ub = up[jb - 1, b]
+                if ub != 0.0:
+                    for a in range(m):
+                        St[b, a] -= ub * Pt[b, a] * lo[jb, a]
+        pmin = min(pmin, _invert_in_place(St, rows))
+        if pmin == 0.0:
+            return 0.0
     return pmin / dmax if dmax > 0.0 else 0.0
 
 
 @njit(cache=True, error_model="numpy")
-def band_solve(B, order, bw, b, x, w):
-    """x = A^-1 b with the band factors of ``band_factor``."""
-    n = B.shape[0]
+def _block_matvec(T, v, y):
+    """y = Tᵀ v (T an inverse block stored transposed), two columns per pass."""
+    m = T.shape[0]
+    for a in range(m):
+        y[a] = 0.0
+    c = 0
+    while c + 1 < m:
+        v0, v1 = v[c], v[c + 1]
+        T0, T1 = T[c], T[c + 1]
+        for a in range(m):
+            y[a] += T0[a] * v0 + T1[a] * v1
+        c += 2
+    if c < m:
+        vc = v[c]
+        Tc = T[c]
+        for a in range(m):
+            y[a] += Tc[a] * vc
+
+
+@njit(cache=True, error_model="numpy")
+def band_solve(BINV, BLU, order, b, x, w, v, y):
+    """x = A^-1 b with the factors of ``band_factor``; w (n), v and y (≥ m) are work."""
+    nb, m = BINV.shape[0], BINV.shape[1]
+    n = nb * m
+    lo, up = BLU[0], BLU[1]
     for k in range(n):
         w[order[k]] = b[k]
-    for i in range(n):
-        acc = w[i]
-        for k in range(max(0, i - bw), i):
-            acc -= B[i, k - i + bw] * w[k]
-        w[i] = acc
-    for i in range(n - 1, -1, -1):
-        acc = w[i]
-        for j in range(i + 1, min(i + bw, n - 1) + 1):
-            acc -= B[i, j - i + bw] * w[j]
-        w[i] = acc / B[i, bw]
+    for jb in range(nb):
+        base = jb * m
+        if jb > 0:
+            for a in range(m):
+                v[a] = w[base + a] - lo[jb, a] * w[base - m + a]
+        else:
+            for a in range(m):
+                v[a] = w[base + a]
+        _block_matvec(BINV[jb], v, y)
+        for a in range(m):
+            w[base + a] = y[a]
+    for jb in range(nb - 2, -1, -1):
+        base = jb * m
+        for c in range(m):
+            v[c] = up[jb, c] * w[base + m + c]
+        _block_matvec(BINV[jb], v, y)
+        for a in range(m):
+            w[base + a] -= y[a]
     for k in range(n):
         x[k] = w[order[k]]
 
 
+# ---------------------------------------------------------------------------- multigrid-preconditioned GMRES
+# For grids too large for the band: restarted GMRES, right-preconditioned by one V-cycle of an
+# aggregation multigrid on the grid's own hierarchy (2 × 2 cells per coarse cell, piecewise-constant
+# prolongation P, coarse matrices Pᵀ A P, which stay 5-point, with their couplings halved (see
+# ``_mg_level_matrix``); symmetric Gauss-Seidel smoothing (a forward and a backward sweep) before
+# and after the coarse correction; dense LU on the coarsest level).
+# Layout, all levels concatenated (level l holds cells MGL[0, l] .. MGL[0, l + 1] - 1):
+#   MGL (3, levels + 1) int64: cell offsets, and the grid size (a, b) of each level (cell i b + j)
+#   MGI (N, 9) int64: per cell its 4 neighbours (-x, +x, -y, +y; local index, -1 none),
+#       the Galerkin target of each of those 4 entries in MGA (flat index (row) * 5 + slot,
+#       slot 0 the diagonal; -1 none), and the coarse cell (local index) of this cell
+#   MGA (N, 5): matrix rows (diagonal, then the 4 neighbour coefficients)
+#   MGW (4, N): x, b, r, 1 / diagonal
+#   DLU (m, m) + PIV (m): dense LU of the coarsest level, partial pivoting
+#   KRY (2 (restart + 1), n): GMRES basis V and preconditioned vectors Z
+#   HES (restart + 4, restart + 1): Hessenberg matrix, then rows of Givens cosines, sines, rhs
+MG_X, MG_B, MG_R, MG_IDIAG = 0, 1, 2, 3
+MGI_NB, MGI_GAL, MGI_AGG = 0, 4, 8
+
+
+@njit(cache=True, error_model="numpy")
+def _mg_level_matrix(MGL, MGI, MGA, MGW, l):
+    """Coarse matrix of level l + 1 from that of level l (also 1 / diagonal of level l + 1)."""
+    o0, o1, o2 = MGL[0, l], MGL[0, l + 1], MGL[0, l + 2]
+    flat = MGA.reshape(MGA.size)
+    for g in range(o1, o2):
+        for s in range(5):
+            MGA[g, s] = 0.0
+    for g in range(o0, o1):
+        flat[(o1 + MGI[g, MGI_AGG]) * 5] += MGA[g, 0]
+        for d in range(4):
+            t = MGI[g, MGI_GAL + d]
+            if t >= 0:
+                flat[t] += MGA[g, 1 + d]
+    # Pᵀ A P doubles the couplings of a diffusion operator against those of its discretisation on the
+    # coarse grid (two fine faces per coarse face, same ratio area / distance) while its row sums (the
+    # compressibility, the boundaries) are right: halve the couplings, keep the row sums
+    for g in range(o1, o2):
+        rs = MGA[g, 0] + MGA[g, 1] + MGA[g, 2] + MGA[g, 3] + MGA[g, 4]
+        MGA[g, 0] = 0.5 * (MGA[g, 0] + rs)
+        for d in range(1, 5):
+            MGA[g, d] *= 0.5
+    for g in range(o1, o2):
+        MGW[MG_IDIAG, g] = 1.0 / MGA[g, 0]
+
+
+@njit(cache=True, error_model="numpy")
+def mg_setup(data, csc_ell, MGL, MGI, MGA, MGW, DLU, PIV):
+    """The multigrid hierarchy of the CSC matrix ``data`` (its entries go to MGA rows by
+    ``csc_ell``: flat index cell * 5 + slot); returns False if a diagonal or the coarsest LU is singular."""
+    levels = MGL.shape[1] - 1
+    n0 = MGL[0, 1]
+    flat = MGA.reshape(MGA.size)
+    for g in range(n0):
+        for s in range(5):
+            MGA[g, s] = 0.0
+    for q in range(data.size):
+        flat[csc_ell[q]] += data[q]
+    for g in range(n0):
+        if MGA[g, 0] == 0.0:
+            return False
+        MGW[MG_IDIAG, g] = 1.0 / MGA[g, 0]
+    for l in range(levels - 1):
+        _mg_level_matrix(MGL, MGI, MGA, MGW, l)
+    # dense LU (partial pivoting) of the coarsest level
+    oc = MGL[0, levels - 1]
+    m = MGL[0, levels] - oc
+    for i in range(m):
+        for j in range(m):
+            DLU[i, j] = 0.0
+    for i in range(m):
+        g = oc + i
+        DLU[i, i] += MGA[g, 0]
+        for d in range(4):
+            c = MGI[g, MGI_NB + d]
+            if c >= 0:
+                DLU[i, c] += MGA[g, 1 + d]
+    for k in range(m):
+        p = k
+        big = abs(DLU[k, k])
+        for i in range(k + 1, m):
+            if abs(DLU[i, k]) > big:
+                big = abs(DLU[i, k])
+                p = i
+        PIV[k] = p
+        if big == 0.0:
+            return False
+        if p != k:
+            for j in range(m):
+                tmp = DLU[k, j]
+                DLU[k, j] = DLU[p, j]
+                DLU[p, j] = tmp
+        inv = 1.0 / DLU[k, k]
+        for i in range(k + 1, m):
+            lik = DLU[i, k] * inv
+            DLU[i, k] = lik
+            if lik != 0.0:
+                for j in range(k + 1, m):
+                    DLU[i, j] -= lik * DLU[k, j]
+    return True
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _mg_row(MGI, MGA, X, o0, b, g, edge):
+    """Σ_d A[g, d] x[neighbour d] of cell g (local neighbours from MGI on the edges of the level's
+    grid, else g ∓ b, g ∓ 1)."""
+    if edge:
+        s = 0.0
+        for d in range(4):
+            c = MGI[g, MGI_NB + d]
+            if c >= 0:
+                s += MGA[g, 1 + d] * X[o0 + c]
+        return s
+    return MGA[g, 1] * X[g - b] + MGA[g, 2] * X[g + b] + MGA[g, 3] * X[g - 1] + MGA[g, 4] * X[g + 1]
+
+
+@njit(cache=True, error_model="numpy")
+def _mg_gauss_seidel(MGL, MGI, MGA, MGW, l, forward):
+    """One Gauss-Seidel sweep of level l (cells in index order, forward or backward)."""
+    X, B, IDG = MGW[MG_X], MGW[MG_B], MGW[MG_IDIAG]
+    o0, a, b = MGL[0, l], MGL[1, l], MGL[2, l]
+    for ii in range(a):
+        i = ii if forward else a - 1 - ii
+        edge_i = i == 0 or i == a - 1
+        for jj in range(b):
+            j = jj if forward else b - 1 - jj
+            g = o0 + i * b + j
+            X[g] = (B[g] - _mg_row(MGI, MGA, X, o0, b, g, edge_i or j == 0 or j == b - 1)) * IDG[g]
+
+
+@njit(cache=True, error_model="numpy")
+def _mg_restrict_residual(MGL, MGI, MGA, MGW, l):
+    """b of level l + 1 = Pᵀ (b - A x) of level l."""
+    X, B = MGW[MG_X], MGW[MG_B]
+    o0, a, b = MGL[0, l], MGL[1, l], MGL[2, l]
+    o1, o2 = MGL[0, l + 1], MGL[0, l + 2]
+    for g in range(o1, o2):
+        B[g] = 0.0
+    for i in range(a):
+        edge_i = i == 0 or i == a - 1
+        for j in range(b):
+            g = o0 + i * b + j
+            r = B[g] - MGA[g, 0] * X[g] - _mg_row(MGI, MGA, X, o0, b, g, edge_i or j == 0 or j == b - 1)
+            B[o1 + MGI[g, MGI_AGG]] += r
+
+
+@njit(cache=True, error_model="numpy")
+def mg_vcycle(MGL, MGI, MGA, MGW, DLU, PIV, b, x):
+    """x ≈ A^-1 b by one V-cycle (a fixed linear operator: the preconditioner of ``gmres``)."""
+    levels = MGL.shape[1] - 1
+    X, B = MGW[MG_X], MGW[MG_B]
+    n0 = MGL[0, 1]
+    for g in range(n0):
+        B[g] = b[g]
+    for l in range(levels - 1):
+        o0, o1 = MGL[0, l], MGL[0, l + 1]
+        for g in range(o0, o1):
+            X[g] = 0.0
+        _mg_gauss_seidel(MGL, MGI, MGA, MGW, l, True)
+        _mg_gauss_seidel(MGL, MGI, MGA, MGW, l, False)
+        _mg_restrict_residual(MGL, MGI, MGA, MGW, l)
+    oc = MGL[0, levels - 1]
+    m = MGL[0, levels] - oc
+    for i in range(m):  # coarsest: forward / back substitution with the pivots
+        X[oc + i] = B[oc + i]
+    for k in range(m):
+        p = PIV[k]
+        if p != k:
+            tmp = X[oc + k]
+            X[oc + k] = X[oc + p]
+            X[oc + p] = tmp
+        xk = X[oc + k]
+        for i in range(k + 1, m):
+            X[oc + i] -= DLU[i, k] * xk
+    for k in range(m - 1, -1, -1):
+        s = X[oc + k]
+        for j in range(k + 1, m):
+            s -= DLU[k, j] * X[oc + j]
+        X[oc + k] = s / DLU[k, k]
+    for l in range(levels - 2, -1, -1):
+        o0, o1 = MGL[0, l], MGL[0, l + 1]
+        for g in range(o0, o1):
+            X[g] += X[o1 + MGI[g, MGI_AGG]]
+        _mg_gauss_seidel(MGL, MGI, MGA, MGW, l, False)
+        _mg_gauss_seidel(MGL, MGI, MGA, MGW, l, True)
+    for g in range(n0):
+        x[g] = X[g]
+
+
+@njit(cache=True, error_model="numpy")
+def mg_matvec(MGL, MGI, MGA, x, y):
+    """y = A x with the finest level of the hierarchy."""
+    a, b = MGL[1, 0], MGL[2, 0]
+    for i in range(a):
+        edge_i = i == 0 or i == a - 1
+        for j in range(b):
+            g = i * b + j
+            y[g] = MGA[g, 0] * x[g] + _mg_row(MGI, MGA, x, 0, b, g, edge_i or j == 0 or j == b - 1)
+
+
+@njit(cache=True, error_model="numpy")
+def gmres(MGL, MGI, MGA, MGW, DLU, PIV, KRY, HES, b, x, target, max_iter):
+    """x ≈ A^-1 b by restarted GMRES with the V-cycle as right preconditioner, from x = 0, until
+    ||b - A x||_2 <= target. Returns the iterations made, or -1 when ``max_iter`` were not enough."""
+    n = b.size
+    m = HES.shape[1] - 1
+    Vb = KRY[: m + 1]
+    Zb = KRY[m + 1:]
+    Hh = HES[: m + 1]
+    cs, sn, gv = HES[m + 1], HES[m + 2], HES[m + 3]
+    for i in range(n):
+        x[i] = 0.0
+    r = Vb[0]
+    for i in range(n):
+        r[i] = b[i]
+    its = 0
+    while True:
+        beta = 0.0
+        for i in range(n):
+            beta += r[i] * r[i]
+        beta = np.sqrt(beta)
+        if beta <= target:
+            return its
+        if its >= max_iter:
+            return -1
+        v0 = Vb[0]
+        for i in range(n):
+            v0[i] = r[i] / beta
+        for k in range(m + 1):
+            gv[k] = 0.0
+        gv[0] = beta
+        k_used = 0
+        for k in range(m):
+            mg_vcycle(MGL, MGI, MGA, MGW, DLU, PIV, Vb[k], Zb[k])
+            w = Vb[k + 1]
+            mg_matvec(MGL, MGI, MGA, Zb[k], w)
+            for jj in range(k + 1):  # modified Gram-Schmidt
+                vj = Vb[jj]
+                hsum = 0.0
+                for i in range(n):
+                    hsum += w[i] * vj[i]
+                Hh[jj, k] = hsum
+                for i in range(n):
+                    w[i] -= hsum * vj[i]
+            hn = 0.0
+            for i in range(n):
+                hn += w[i] * w[i]
+            hn = np.sqrt(hn)
+            Hh[k + 1, k] = hn
+            if hn > 0.0:
+                for i in range(n):
+                    w[i] /= hn
+            for jj in range(k):  # earlier rotations
+                h0, h1 = Hh[jj, k], Hh[jj + 1, k]
+                Hh[jj, k] = cs[jj] * h0 + sn[jj] * h1
+                Hh[jj + 1, k] = -sn[jj] * h0 + cs[jj] * h1
+            h0, h1 = Hh[k, k], Hh[k + 1, k]
+            den = np.sqrt(h0 * h0 + h1 * h1)
+            if den == 0.0:
+                cs[k], sn[k] = 1.0, 0.0
+            else:
+                cs[k], sn[k] = h0 / den, h1 / den
+            Hh[k, k] = den
+            Hh[k + 1, k] = 0.0
+            gv[k + 1] = -sn[k] * gv[k]
+            gv[k] = cs[k] * gv[k]
+            its += 1
+            k_used = k + 1
+            if abs(gv[k + 1]) <= target or its >= max_iter or hn == 0.0:
+                break
+        # y = H^-1 g, x += Z y
+        for jj in range(k_used - 1, -1, -1):
+            s = gv[jj]
+            for q in range(jj + 1, k_used):
+                s -= Hh[jj, q] * gv[q]
+            gv[jj] = s / Hh[jj, jj]
+        for jj in range(k_used):
+            z = Zb[jj]
+            y = gv[jj]
+            for i in range(n):
+                x[i] += y * z[i]
+        # true residual for the restart test
+        mg_matvec(MGL, MGI, MGA, x, r)
+        for i in range(n):
+            r[i] = b[i] - r[i]
+
+
+# ---------------------------------------------------------------------------- the iterations of a step
 @njit(cache=True, error_model="numpy")
 def iterate(U, V, C, FU, FV, KU, KV, row_of, flags, RULES, VEC, MAT, diag_pos, upos, vpos, pin_pos,
-            LUI, Li, Lx, Ui, Ux, Ud, B, order, csc_indices, csc_indptr, fpar, ipar, out):
+            LUI, Li, Lx, Ui, Ux, Ud, BAND, BLU, order, csc_indices, csc_indptr, csc_block, csc_ell,
+            MGL, MGI, MGA, MGW, DLU, PIV, KRY, HES, fpar, ipar, out):
     """Pressure-correction (Newton) iterations of one time step until the mass residual is below
     ``fpar[F_TOL]``.
 
     Each iteration: momentum prediction and continuity residual (``predict_residual``), then
-    p' from the factorised pressure matrix and p += p'. The factors are those of an earlier
-    matrix while it stays within ``F_REUSE`` (max norm) of the current one; when it does not,
-    or an iteration reduces the residual by less than ``F_SLOW``, the matrix is factorised
-    again: here, as a band (``band_factor``, ``ipar[I_BANDED]``), or else by the caller with
-    SuperLU: the kernel returns NEED_FACTORS with the current matrix in ``MAT[M_DATA]`` and is
-    called again (``I_RESUME`` then skips straight to the solve). Otherwise it returns
-    CONVERGED, MAX_ITERATIONS or NOT_FINITE; the step's diagnostics are in ``out``.
+    p' from the pressure matrix (the Jacobian of the residuals) and p += p'. Band and SuperLU:
+    the factors are those of an earlier matrix while no entry of the current one differs from it
+    by more than ``F_REUSE`` times its largest entry; when one does, or an iteration reduces the
+    residual by less than ``F_SLOW``, the matrix is factorised again: here as a band
+    (``band_factor``; after a change of the step's matrix from the first block whose rows
+    changed by more than BLOCK_REUSE × F_REUSE), or else by the caller with SuperLU: the kernel
+    returns NEED_FACTORS with the current matrix in ``MAT[M_DATA]`` and is called again
+    (``I_RESUME`` then skips straight to the solve). Multigrid: the matrix and its hierarchy
+    are made again on every iteration (Newton); each p' comes from GMRES to a residual ``F_ETA``
+    times that of the iteration (no smaller than a tenth of the step's tolerance); if GMRES
+    stalls, or the hierarchy cannot be made, the solver falls back to SuperLU. Returns
+    CONVERGED, MAX_ITERATIONS or NOT_FINITE, with the ghost faces filled and the step's
+    diagnostics in ``out``.
     """
     nx, ny, max_it, pin_diag = ipar[I_NX], ipar[I_NY], ipar[I_MAXIT], ipar[I_PIN]
     R, dp, work = VEC[V_R], VEC[V_DP], VEC[V_WORK]
@@ -723,43 +1309,68 @@ def iterate(U, V, C, FU, FV, KU, KV, row_of, flags, RULES, VEC, MAT, diag_pos, u
     it = ipar[I_ITER]
     while True:
         if ipar[I_RESUME] == 0:
-            res, qref, fin, fout, acc, mass, courant = predict_residual(U, V, C, FU, FV, KU, KV, row_of, flags, R,
-                                                                        fpar, ipar)
+            res, qref, fin, fout, acc, mass = predict_residual(U, V, C, FU, FV, KU, KV, row_of, R, fpar, ipar)
             rel = res / qref if qref > 0.0 else 0.0
             out[O_RES], out[O_QREF], out[O_IN], out[O_OUT] = res, qref, fin, fout
-            out[O_ACC], out[O_MASS], out[O_COURANT], out[O_REL] = acc, mass, courant, rel
+            out[O_ACC], out[O_MASS], out[O_REL] = acc, mass, rel
             ipar[I_ITER] = it
+            status = -1
             if not np.isfinite(rel):
-                return NOT_FINITE
-            if rel <= fpar[F_TOL]:
-                return CONVERGED
-            if it >= max_it:
-                return MAX_ITERATIONS
+                status = NOT_FINITE
+            elif rel <= fpar[F_TOL]:
+                status = CONVERGED
+            elif it >= max_it:
+                status = MAX_ITERATIONS
+            if status >= 0:
+                fill_face_ghosts(U, V, flags, nx, ny)
+                out[O_COURANT] = courant_number(U, V, fpar, ipar)
+                return status
             need = False
+            j0 = 0  # band: first block to factorise again
+            solver = ipar[I_SOLVER]
             if ipar[I_CHECKED] == 0:
                 ipar[I_CHECKED] = 1
                 assemble_pressure(data, diag_pos, upos, vpos, pin_pos, U, V, C, FU, FV, KU, KV, fpar, ipar)
-                if ipar[I_HAVE_LU] == 0:
+                if ipar[I_HAVE_LU] == 0 or solver == SOLVER_MULTIGRID:
                     need = True
                 else:
-                    dmax = 0.0
                     amax = 0.0
                     for k in range(data.size):
-                        dmax = max(dmax, abs(data[k] - factored[k]))
                         amax = max(amax, abs(factored[k]))
-                    need = dmax > fpar[F_REUSE] * amax
-            elif rel > fpar[F_SLOW] * out[O_PREV] and ipar[I_REFACTORED] == 0:
+                    tol = fpar[F_REUSE] * amax
+                    for k in range(data.size):
+                        if abs(data[k] - factored[k]) > tol:
+                            need = True
+                            break
+                    if need and solver == SOLVER_BAND:
+                        # from the first block (in elimination order) that changed by more than a share
+                        # BLOCK_REUSE of the tolerance: the blocks before it keep their factors
+                        j0 = BAND.shape[0]
+                        tol *= BLOCK_REUSE
+                        for k in range(data.size):
+                            if abs(data[k] - factored[k]) > tol:
+                                j0 = min(j0, csc_block[k])
+            elif solver == SOLVER_MULTIGRID or (rel > fpar[F_SLOW] * out[O_PREV] and ipar[I_REFACTORED] == 0):
+                # multigrid: a new Jacobian every iteration (Newton), its hierarchy costs little
                 assemble_pressure(data, diag_pos, upos, vpos, pin_pos, U, V, C, FU, FV, KU, KV, fpar, ipar)
                 need = True
             if need:
                 ipar[I_REFACTORED] = 1
-                if ipar[I_BANDED] == 1 and band_factor(data, csc_indices, csc_indptr, order, ipar[I_BW], B) > 1e-12:
+                if solver == SOLVER_BAND and band_factor(data, csc_indices, csc_indptr, order, BAND, BLU,
+                                                         VEC[V_ROW:V_ROW + 2], j0) > 1e-12:
+                    for k in range(data.size):
+                        if csc_block[k] >= j0:
+                            factored[k] = data[k]
+                    ipar[I_HAVE_LU] = 1
+                    ipar[I_NFACT] += 1
+                    ipar[I_BLOCKS] += BAND.shape[0] - j0
+                elif solver == SOLVER_MULTIGRID and mg_setup(data, csc_ell, MGL, MGI, MGA, MGW, DLU, PIV):
                     for k in range(data.size):
                         factored[k] = data[k]
                     ipar[I_HAVE_LU] = 1
                     ipar[I_NFACT] += 1
                 else:  # SuperLU, by the caller (from now on, if the band had a poor pivot)
-                    ipar[I_BANDED] = 0
+                    ipar[I_SOLVER] = SOLVER_SUPERLU
                     ipar[I_RESUME] = 1
                     return NEED_FACTORS
         ipar[I_RESUME] = 0
@@ -768,8 +1379,22 @@ def iterate(U, V, C, FU, FV, KU, KV, row_of, flags, RULES, VEC, MAT, diag_pos, u
             R[k] = -R[k]
         if pin_diag >= 0:
             R[0] = 0.0
-        if ipar[I_BANDED] == 1:
-            band_solve(B, order, ipar[I_BW], R, dp, work)
+        solver = ipar[I_SOLVER]
+        if solver == SOLVER_BAND:
+            band_solve(BAND, BLU, order, R, dp, work, VEC[V_ROW], VEC[V_WORK2])
+        elif solver == SOLVER_MULTIGRID:
+            rn = 0.0
+            for k in range(n):
+                rn += R[k] * R[k]
+            target = max(fpar[F_ETA] * np.sqrt(rn), 0.1 * fpar[F_TOL] * out[O_QREF] / np.sqrt(n))
+            kits = gmres(MGL, MGI, MGA, MGW, DLU, PIV, KRY, HES, R, dp, target, ipar[I_KRYLOV_MAX])
+            if kits < 0:  # stalled: SuperLU from now on
+                for k in range(n):
+                    R[k] = -R[k]
+                ipar[I_SOLVER] = SOLVER_SUPERLU
+                ipar[I_RESUME] = 1
+                return NEED_FACTORS
+            ipar[I_KRYLOV] += kits
         else:
             lu_solve(LUI, Li, Lx, Ui, Ux, Ud, R, dp, work)
         P = C[C_P]

@@ -17,12 +17,22 @@ means of ε and ρ; upwind or TVD face velocities) and viscous stress are explic
 pressure, interphase drag and the density of inertia and gravity are implicit. Each
 face velocity is then u = û − D ∂p/∂x with a scalar D, so the pressure correction of
 the SIMPLE family is exact here: the outer iterations are Newton iterations of the
-continuity equation for the pressure, with ρ(p) of eq. 44. They stop when the summed
-cell mass residual, relative to the gas flow through the domain, is below
+continuity equation for the pressure, with ρ(p) of eq. 44 (the matrix is their exact
+Jacobian, including the density in the inertia of the face momentum). They stop when the
+summed cell mass residual, relative to the gas flow through the domain, is below
 ``tolerance``. The constant-density gas converges in one correction (with a freshly
-factorised matrix). Stability needs the Courant number |u| dt/dx + |v| dt/dy below
-about 1 (upwind) or 0.5 (TVD) and the viscous number ν dt (2/dx² + 2/dy²) below 1;
-drag never limits dt.
+factorised matrix); the ideal gas in about three, the first Newton step and then
+corrections with the matrix of the first (chord). Stability needs the Courant number
+|u| dt/dx + |v| dt/dy below about 1 (upwind) or 0.5 (TVD) and the viscous number
+ν dt (2/dx² + 2/dy²) below 1; drag never limits dt.
+
+The corrections are solved (``linear_solver``) by a compiled block-tridiagonal LU on grids
+up to 64 cells across (factors reused from step to step while the matrix changes little,
+and after a change factorised again only from the first changed line of cells, counted from
+the pressure outlet), by GMRES with an aggregation-multigrid preconditioner beyond (cost
+about proportional to the number of cells), or by SciPy's SuperLU. One step is three
+compiled calls (``start_step``, ``iterate``, ``end_step``); the rest of ``advance`` checks
+and classifies its inputs.
 
 Inside the solver the pressure is kept relative to ``reference_pressure``, so that
 gradients of a few Pa/m in 1e5 Pa keep their digits; ``GasState.p`` is absolute.
@@ -46,9 +56,15 @@ from .grid import (FREE_SLIP, INFLOW, NO_SLIP, OUTFLOW, PERIODIC, PRESSURE, SIDE
                    check_sides)
 
 GAS_CONSTANT = 8.314462618  # R [J mol^-1 K^-1]
+_F64 = np.dtype(np.float64)
 SCHEMES = {"upwind": UPWIND, "tvd": TVD}
 SLOW_CONVERGENCE = 0.3  # refactorise the pressure matrix when an iteration cuts the residual by less than this
-BAND_MAX = 64  # band LU (compiled) up to this half-width; SuperLU beyond, and with both sides periodic
+BAND_MAX = 64  # band LU (compiled) up to this half-width; multigrid-preconditioned GMRES beyond
+LINEAR_SOLVERS = ("auto", "band", "multigrid", "superlu")
+KRYLOV_REDUCTION = 1e-4  # multigrid path: each correction solves the linear system to this fraction of its residual
+KRYLOV_RESTART = 30  # GMRES restart length
+KRYLOV_MAX = 300  # GMRES iterations of one correction before the multigrid path gives way to SuperLU
+COARSEST = 64  # cells of the coarsest multigrid level (dense LU) at most
 
 
 def _show(value) -> str:
@@ -204,12 +220,19 @@ class GasSolver:
         The factorised pressure matrix is reused while the new matrix differs from it
         by at most this fraction (max norm); the iterations then converge a little
         slower but skip the factorisation. 0 refactorises whenever anything changed.
-    linear_solver : {"auto", "band", "superlu"}
-        Factorisation of the pressure-correction matrix: a compiled band LU without
+        The band factorises again only the blocks (lines of cells) from the first one
+        whose rows changed by more than 0.3 times this fraction. Not used by multigrid,
+        which makes its hierarchy anew every iteration.
+    linear_solver : {"auto", "band", "multigrid", "superlu"}
+        Solution of the pressure-correction equations: "band", a compiled band LU without
         pivoting (the matrix is diagonally dominant; the unknowns are numbered along the
-        shorter or the periodic direction first, so the half-width is min(nx, ny)), or
-        SciPy's SuperLU with its factors applied by compiled triangular solves. "auto":
-        the band up to a half-width of 64 cells unless both directions are periodic.
+        shorter or the periodic direction first, so the half-width is min(nx, ny));
+        "multigrid", compiled GMRES preconditioned by an aggregation multigrid V-cycle
+        (each correction solved to 1e-4 of its residual; the Newton iterations still stop
+        at ``tolerance``), for large grids; "superlu", SciPy's SuperLU with its factors
+        applied by compiled triangular solves. "auto": the band up to a half-width of 64
+        cells unless both directions are periodic, multigrid beyond. Band and multigrid
+        give way to SuperLU if they fail (a poor pivot, a stalled GMRES).
 
     Examples
     --------
@@ -242,8 +265,9 @@ class GasSolver:
             raise CaseError(f"gas.max_iterations = {max_iterations!r}: must be an integer >= 1")
         if not (0.0 <= jacobian_reuse < 1.0):
             raise CaseError(f"gas.jacobian_reuse = {jacobian_reuse!r}: must be in [0, 1)")
-        if linear_solver not in ("auto", "band", "superlu"):
-            raise CaseError(f"gas.linear_solver = {linear_solver!r}: allowed are 'auto', 'band', 'superlu'")
+        if linear_solver not in LINEAR_SOLVERS:
+            raise CaseError(f"gas.linear_solver = {linear_solver!r}: allowed are "
+                            + ", ".join(repr(k) for k in LINEAR_SOLVERS))
         if linear_solver == "band" and all(boundaries[s].flag == PERIODIC for s in SIDES):
             raise CaseError("gas.linear_solver = 'band': not with periodic sides in both directions; use 'superlu'")
         self._linear_solver = linear_solver
@@ -252,6 +276,8 @@ class GasSolver:
         self.gravity = (float(g[0]), float(g[1]))
         self.convection = convection
         self.tolerance = float(tolerance)
+        self._sqrt_tolerance = math.sqrt(self.tolerance)
+        self._p_ref = float(props.reference_pressure)
         self.max_iterations = max_iterations
         self.jacobian_reuse = float(jacobian_reuse)
         self.flags = grid.cell_flags(self.boundaries)
@@ -264,6 +290,15 @@ class GasSolver:
         self._set_boundary_values(0.0)
         self.C[K.C_PFIX_OLD] = self.C[K.C_PFIX]
         self._shapes = (grid.shape, grid.u_shape, grid.v_shape)
+        self._set_iterate_args()
+
+    def _set_iterate_args(self):
+        """The arguments of ``K.iterate``, all persistent arrays (the SuperLU factors change in ``_factorise``)."""
+        self._iterate_args = (self.U, self.V, self.C, self.FU, self.FV, self.KU, self.KV, self.row_of, self.flags,
+                              self.RULES, self.VEC, self.MAT, self.diag_pos, self.upos, self.vpos, self.pin_pos,
+                              *self._factors, self._band, self._band_lu, self._order, self._csc_indices,
+                              self._csc_indptr, self._csc_block, self._csc_ell, *self._mg, self._fpar, self._ipar,
+                              self._out)
 
     # ------------------------------------------------------------ set-up
     def _setup_faces(self):
@@ -331,7 +366,7 @@ class GasSolver:
             self.erule[f] = K.R_COPY  # Hoomans 1996 §3.5: wall cells copy the adjacent voidage
         self.erule[INFLOW] = K.R_FIXED  # Hoomans 1996 §3.5: fixed voidage in influx cells
         self.erule[PERIODIC] = K.R_WRAP
-        self.C = np.zeros((7, nx + 2, ny + 2))  # stacked centre arrays, slots K.C_*
+        self.C = np.zeros((K.N_C, nx + 2, ny + 2))  # stacked centre arrays, slots K.C_*
         self.P, self.RHO, self.E = self.C[K.C_P], self.C[K.C_RHO], self.C[K.C_E]
         self.pfix, self.efix = self.C[K.C_PFIX], self.C[K.C_EFIX]
         self.efix[:] = 1.0
@@ -389,20 +424,19 @@ class GasSolver:
         nx, ny = self.grid.nx, self.grid.ny
         self.U, self.G = np.zeros((nx + 5, ny + 4)), np.zeros((nx + 5, ny + 4))
         self.V, self.H = np.zeros((nx + 4, ny + 5)), np.zeros((nx + 4, ny + 5))
-        self.FU = np.zeros((7,) + self.grid.u_shape)  # stacked x-face arrays, slots K.F_*
-        self.FV = np.zeros((7,) + self.grid.v_shape)
+        self.FU = np.zeros((K.N_F,) + self.grid.u_shape)  # stacked x-face arrays, slots K.F_*
+        self.FV = np.zeros((K.N_F,) + self.grid.v_shape)
         self.exu, self.exv = self.FU[K.F_EX], self.FV[K.F_EX]
-        self.Du, self.Dv = self.FU[K.F_D], self.FV[K.F_D]
         self.ufix, self.vfix = self.FU[K.F_FIX], self.FV[K.F_FIX]
         self.wout_u, self.wout_v = self.FU[K.F_WOUT], self.FV[K.F_WOUT]
-        self._tmp_u, self._tmp_v = np.zeros(self.grid.u_shape), np.zeros(self.grid.v_shape)
+        self.TAU = np.zeros((nx + 1, ny + 1))  # shear stresses at the corners (work)
         n = nx * ny
-        self.VEC = np.zeros((3, n))  # V_R, V_DP, V_WORK
+        self.VEC = np.zeros((K.N_VEC, n))  # V_R, V_DP, V_WORK, V_WORK2, V_ROW
         self.R = self.VEC[K.V_R]
         self._factors = (np.zeros((4, n + 1), np.int64), np.zeros(1, np.int64), np.zeros(1), np.zeros(1, np.int64),
                          np.zeros(1), np.ones(n))  # LUI, Li, Lx, Ui, Ux, Ud: none yet
         gd = self.grid
-        self._fpar = np.zeros(15)
+        self._fpar = np.zeros(K.N_FPAR)
         self._fpar[K.F_MU] = self.props.viscosity
         self._fpar[K.F_PREF] = self.props.reference_pressure
         self._fpar[[K.F_GX, K.F_GY, K.F_DX, K.F_DY, K.F_AX, K.F_AY, K.F_VOL]] = (
@@ -412,23 +446,119 @@ class GasSolver:
         self._fpar[K.F_TOL] = self.tolerance
         self._fpar[K.F_REUSE] = self.jacobian_reuse
         self._fpar[K.F_SLOW] = SLOW_CONVERGENCE
-        self._ipar = np.zeros(13, np.int64)
-        self._ipar[[K.I_NX, K.I_NY, K.I_MAXIT, K.I_PIN, K.I_SCHEME]] = (nx, ny, self.max_iterations, self.pin_diag,
-                                                                      SCHEMES[self.convection])
-        # band LU: number the unknowns along the shorter direction first (along the periodic one if
-        # there is one, so that its wrap-around stays inside the band)
+        self._fpar[K.F_ETA] = KRYLOV_REDUCTION
+        self._ipar = np.zeros(K.N_IPAR, np.int64)
+        self._ipar[[K.I_NX, K.I_NY, K.I_MAXIT, K.I_PIN, K.I_SCHEME, K.I_KRYLOV_MAX, K.I_RESTART, K.I_PX, K.I_PY]] = (
+            nx, ny, self.max_iterations, self.pin_diag, SCHEMES[self.convection], KRYLOV_MAX, KRYLOV_RESTART,
+            self.periodic_x, self.periodic_y)
+        # band (block-tridiagonal) LU: number the unknowns along the shorter direction first (along the
+        # periodic one if there is one, so that its wrap-around stays inside a block); the blocks (lines
+        # of cells across the other direction) from the pressure/outflow side, where the gas is usually
+        # free of particles and its matrix rows change least: after a change only the blocks from the
+        # first changed one on are factorised again
         x_fast = self.periodic_x or (not self.periodic_y and nx < ny)
         bw = nx if x_fast else ny
         I, J = np.meshgrid(np.arange(nx), np.arange(ny), indexing="ij")  # unknown i ny + j ...
+        open_sides = (PRESSURE, OUTFLOW)
+        lo_side, hi_side = ("bottom", "top") if x_fast else ("left", "right")
+        if self.boundaries[hi_side].flag in open_sides and self.boundaries[lo_side].flag not in open_sides:
+            J, I = (ny - 1 - J, I) if x_fast else (J, nx - 1 - I)
         self._order = ((J * nx + I) if x_fast else (I * ny + J)).ravel().astype(np.int64)  # ... is band row
-        banded = self._linear_solver == "band" or (self._linear_solver == "auto" and bw <= BAND_MAX
-                                                     and not (self.periodic_x and self.periodic_y))
-        self._ipar[K.I_BANDED] = int(banded)
+        both_periodic = self.periodic_x and self.periodic_y
+        choice = self._linear_solver
+        if choice == "auto":
+            choice = "band" if bw <= BAND_MAX and not both_periodic else "multigrid"
+        solver = {"band": K.SOLVER_BAND, "multigrid": K.SOLVER_MULTIGRID, "superlu": K.SOLVER_SUPERLU}[choice]
+        if solver == K.SOLVER_MULTIGRID and not self._setup_multigrid():
+            solver = K.SOLVER_SUPERLU
+        if solver != K.SOLVER_MULTIGRID:
+            self._no_multigrid()
+        self._ipar[K.I_SOLVER] = solver
         self._ipar[K.I_BW] = bw
-        self._band = np.zeros((n, 2 * bw + 1) if banded else (1, 1))
+        banded = solver == K.SOLVER_BAND
+        self._band = np.zeros((n // bw, bw, bw) if banded else (1, 1, 1))  # block-tridiagonal LU
+        self._band_lu = np.zeros((2, n // bw, bw) if banded else (2, 1, 1))
         self._csc_indices = self._indices.astype(np.int64)
         self._csc_indptr = self._indptr.astype(np.int64)
+        self._csc_block = self._order[self._csc_indices] // bw  # band: block of each matrix entry's row
         self._out = np.zeros(9)
+        # step inputs: modes (K.IN_*), a 1 x 1 array per input for numbers, an empty array for none
+        self._modes = np.zeros(6, np.int64)
+        self._scalars = np.zeros((6, 1, 1))
+        self._none = np.zeros((0, 0))
+
+    def _no_multigrid(self):
+        self._csc_ell = np.zeros(1, np.int64)
+        self._mg = (np.zeros((3, 2), np.int64), np.zeros((1, 9), np.int64), np.zeros((1, 5)), np.zeros((4, 1)),
+                    np.zeros((1, 1)), np.zeros(1, np.int64), np.zeros((2, 1)), np.zeros((4, 1)))
+
+    @staticmethod
+    def _grid_neighbours(a, b, px, py):
+        """(a b, 4) neighbours -x, +x, -y, +y of the cells i b + j of an a × b grid (-1: none or itself)."""
+        I, J = np.meshgrid(np.arange(a), np.arange(b), indexing="ij")
+        me = (I * b + J).ravel()
+        out = np.empty((a * b, 4), np.int64)
+        for d, (di, dj) in enumerate(((-1, 0), (1, 0), (0, -1), (0, 1))):
+            i2, j2 = I + di, J + dj
+            if px:
+                i2 = i2 % a
+            if py:
+                j2 = j2 % b
+            ok = ((i2 >= 0) & (i2 < a) & (j2 >= 0) & (j2 < b)).ravel()
+            k = (i2 * b + j2).ravel()
+            out[:, d] = np.where(ok & (k != me), k, -1)
+        return out
+
+    def _setup_multigrid(self) -> bool:
+        """The multigrid levels (see ``_solver_kernels``: MGL, MGI, ...) and the map of the CSC entries of
+        the pressure matrix to its rows; False if the matrix pattern is not the grid's 5-point one."""
+        nx, ny, px, py = self.grid.nx, self.grid.ny, self.periodic_x, self.periodic_y
+        dims = [(nx, ny)]
+        while dims[-1][0] * dims[-1][1] > COARSEST:
+            a, b = dims[-1]
+            dims.append(((a + 1) // 2, (b + 1) // 2))
+        sizes = [a * b for a, b in dims]
+        offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+        MGI = np.full((int(offsets[-1]), 9), -1, np.int64)
+        nbs = [self._grid_neighbours(a, b, px, py) for a, b in dims]
+        for l, (a, b) in enumerate(dims):
+            rows = slice(offsets[l], offsets[l + 1])
+            MGI[rows, K.MGI_NB:K.MGI_NB + 4] = nbs[l]
+            if l + 1 == len(dims):
+                break
+            bc = dims[l + 1][1]
+            I, J = np.meshgrid(np.arange(a), np.arange(b), indexing="ij")
+            agg = ((I // 2) * bc + J // 2).ravel()
+            MGI[rows, K.MGI_AGG] = agg
+            for d in range(4):
+                c = nbs[l][:, d]
+                has = c >= 0
+                ic, jc = agg, agg[np.where(has, c, 0)]
+                same = ic == jc
+                if np.any(has & ~same & (nbs[l + 1][ic, d] != jc)):
+                    return False  # cannot happen on a rectangular grid
+                MGI[rows, K.MGI_GAL + d] = np.where(has, (offsets[l + 1] + ic) * 5 + np.where(same, 0, d + 1), -1)
+        # CSC entries of the finest level -> (row, slot)
+        n = nx * ny
+        rows = self._indices.astype(np.int64)
+        cols = np.repeat(np.arange(n, dtype=np.int64), np.diff(self._indptr))
+        slot = np.full(rows.size, -1, np.int64)
+        slot[rows == cols] = 0
+        for d in range(3, -1, -1):  # the first matching direction wins
+            slot = np.where((rows != cols) & (nbs[0][rows, d] == cols), d + 1, slot)
+        if np.any(slot < 0):
+            return False
+        self._csc_ell = rows * 5 + slot
+        m = sizes[-1]
+        MGL = np.zeros((3, len(dims) + 1), np.int64)
+        MGL[0] = offsets
+        MGL[1, :-1] = [a for a, _ in dims]
+        MGL[2, :-1] = [b for _, b in dims]
+        N = int(offsets[-1])
+        self._mg = (MGL, MGI, np.zeros((N, 5)), np.zeros((4, N)), np.zeros((m, m)), np.zeros(m, np.int64),
+                    np.zeros((2 * (KRYLOV_RESTART + 1), n)), np.zeros((KRYLOV_RESTART + 4, KRYLOV_RESTART + 1)))
+        self._ipar[K.I_LEVELS] = len(dims)
+        return True
 
     # ------------------------------------------------------------ boundary values
     def _set_boundary_values(self, t: float) -> None:
@@ -548,17 +678,6 @@ class GasSolver:
             bad = float(eps[~((eps > 0.0) & (eps <= 1.0))].ravel()[0])
             raise CaseError(f"gas voidage: value {bad!r} outside (0, 1]")
 
-    def _faces_pair(self, name, value, out_u, out_v):
-        """Write x-face and y-face values of ``value`` (a scalar, a centre array, or a pair of face
-        arrays) into ``out_u``, ``out_v``."""
-        _, su, sv = self._shapes
-        if isinstance(value, (tuple, list)) and len(value) == 2:
-            self._face_array(f"{name}[0]", value[0], su, centre_ok=False, out=out_u)
-            self._face_array(f"{name}[1]", value[1], sv, centre_ok=False, out=out_v)
-        else:
-            self._face_array(name, value, su, True, self.periodic_x, 0, out=out_u)
-            self._face_array(name, value, sv, True, self.periodic_y, 1, out=out_v)
-
     def _check_state(self, state: GasState) -> None:
         c, fu, fv = self._shapes
         for key, shape in (("p", c), ("rho", c), ("voidage", c), ("u", fu), ("v", fv)):
@@ -608,75 +727,85 @@ class GasSolver:
         GasConvergenceError
             The step failed (see the class); ``state`` is left as it was at t.
         """
-        _, su, sv = self._shapes
+        c_shape, su, sv = self._shapes
         if not (isinstance(dt, (int, float, np.floating)) and math.isfinite(dt) and dt > 0.0):
             raise CaseError(f"gas time step dt = {_show(dt)}: must be > 0 [s]")
         self._check_state(state)
+        modes = self._modes
         if voidage is None:
             eps_new = state.voidage
+            modes[K.IN_VOIDAGE] = K.IN_NONE
         else:
-            eps_new = np.ascontiguousarray(self._centre_array("voidage", voidage), dtype=float)
-            self._check_voidage(eps_new)
-        FU, FV = self.FU, self.FV
-        if beta is None:
-            FU[K.F_BETA].fill(0.0)
-            FV[K.F_BETA].fill(0.0)
-        else:
-            self._faces_pair("beta", beta, FU[K.F_BETA], FV[K.F_BETA])
-            if not K.finite_nonnegative(FU[K.F_BETA], FV[K.F_BETA]):
-                raise CaseError("gas beta: must be finite and >= 0 [kg m^-3 s^-1] on every face")
+            eps_new = voidage
+            if not (type(eps_new) is np.ndarray and eps_new.shape == c_shape and eps_new.dtype == _F64
+                    and eps_new.flags.c_contiguous):
+                eps_new = np.ascontiguousarray(self._centre_array("voidage", voidage), dtype=float)
+            modes[K.IN_VOIDAGE] = K.IN_CENTRE
         if isinstance(solids_u, (tuple, list)) or isinstance(solids_v, (tuple, list)):
             raise CaseError("gas solids_u / solids_v: give one array each (faces or centres), not a pair")
-        rhs_u, rhs_v = FU[K.F_RHS], FV[K.F_RHS]
-        rhs_u.fill(0.0)
-        rhs_v.fill(0.0)
-        if beta is not None:
-            if solids_u is not None:
-                rhs_u += FU[K.F_BETA] * self._face_array("solids_u", solids_u, su, True, self.periodic_x, 0,
-                                                         out=self._tmp_u)
-            if solids_v is not None:
-                rhs_v += FV[K.F_BETA] * self._face_array("solids_v", solids_v, sv, True, self.periodic_y, 1,
-                                                         out=self._tmp_v)
-        if source_u is not None:
-            rhs_u += self._face_array("source_u", source_u, su, True, self.periodic_x, 0, out=self._tmp_u)
-        if source_v is not None:
-            rhs_v += self._face_array("source_v", source_v, sv, True, self.periodic_y, 1, out=self._tmp_v)
-        fpar, ipar, out = self._fpar, self._ipar, self._out
-        fpar[K.F_DT] = dt
+        if isinstance(beta, (tuple, list)) and len(beta) == 2:
+            bu, bv = (np.ascontiguousarray(self._face_array(f"beta[{k}]", b, shape, centre_ok=False), dtype=float)
+                      for k, (b, shape) in enumerate(zip(beta, (su, sv))))
+            modes[K.IN_BETA] = K.IN_FACE
+        else:
+            modes[K.IN_BETA], bu = self._input("beta", beta, su, K.IN_BETA)
+            bv = bu
+            if modes[K.IN_BETA] == K.IN_FACE:
+                self._face_array("beta", bu, sv)  # raises: one face array cannot serve both directions
+        modes[K.IN_SOLIDS_U], us = self._input("solids_u", solids_u, su, K.IN_SOLIDS_U)
+        modes[K.IN_SOLIDS_V], vs = self._input("solids_v", solids_v, sv, K.IN_SOLIDS_V)
+        modes[K.IN_SOURCE_U], qu = self._input("source_u", source_u, su, K.IN_SOURCE_U)
+        modes[K.IN_SOURCE_V], qv = self._input("source_v", source_v, sv, K.IN_SOURCE_V)
         if self._time_dependent:  # prescribed pressures at t and t + dt, inflow velocities at t + dt
             if t != self._bc_time:
                 self._set_boundary_values(t)
             self.C[K.C_PFIX_OLD] = self.C[K.C_PFIX]
             self._set_boundary_values(t + dt)
+        fpar, ipar, out = self._fpar, self._ipar, self._out
         U, V = self.U, self.V
-        K.begin_step(state.p, state.rho, state.u, state.v, state.voidage, eps_new, U, V, self.G, self.H, self.C, FU,
-                     FV, self.KU, self.KV, self.flags, self.RULES, fpar, ipar)
-
-        ipar[K.I_ITER] = ipar[K.I_CHECKED] = ipar[K.I_REFACTORED] = ipar[K.I_RESUME] = 0
-        out[K.O_PREV] = math.inf
+        bad = K.start_step(float(dt), state.p, state.rho, state.u, state.v, state.voidage, eps_new, bu, bv, us, vs, qu,
+                           qv, modes, U, V, self.G, self.H, self.C, self.FU, self.FV, self.KU, self.KV, self.flags,
+                           self.RULES, fpar, ipar, out, self.TAU)
+        if bad == K.BAD_VOIDAGE:
+            self._check_voidage(eps_new)
+        if bad == K.BAD_BETA:
+            raise CaseError("gas beta: must be finite and >= 0 [kg m^-3 s^-1] on every face")
         while True:
-            f = self._factors
-            status = K.iterate(U, V, self.C, FU, FV, self.KU, self.KV, self.row_of, self.flags, self.RULES,
-                               self.VEC, self.MAT, self.diag_pos, self.upos, self.vpos, self.pin_pos,
-                               f[0], f[1], f[2], f[3], f[4], f[5], self._band, self._order, self._csc_indices,
-                               self._csc_indptr, fpar, ipar, out)
+            status = K.iterate(*self._iterate_args)
             if status == K.NEED_FACTORS:
                 self._factorise()
                 continue
             break
-        rel = float(out[K.O_REL])
-        if status == K.NOT_FINITE or rel > math.sqrt(self.tolerance):
+        o = out.tolist()
+        rel = o[K.O_REL]
+        if status == K.NOT_FINITE or rel > self._sqrt_tolerance:
             what = "is not finite" if status == K.NOT_FINITE else f"did not converge (mass residual {rel:.3g})"
             raise GasConvergenceError(
-                f"gas step from t = {t:.6g} s with dt = {dt:g} s {what}; Courant number {out[K.O_COURANT]:.3g}: "
+                f"gas step from t = {t:.6g} s with dt = {dt:g} s {what}; Courant number {o[K.O_COURANT]:.3g}: "
                 "keep it below 1 (0.5 with convection='tvd'), see GasSolver.max_time_step")
-        mass = float(out[K.O_MASS])
-        K.end_step(state.p, state.rho, state.u, state.v, U, V, self.C, fpar[K.F_PREF])
-        if voidage is not None:
-            state.voidage[...] = eps_new
+        K.end_step(state.p, state.rho, state.u, state.v, U, V, self.C, self._p_ref, state.voidage, eps_new)
         return StepInfo(iterations=int(ipar[K.I_ITER]), mass_residual=rel, converged=rel <= self.tolerance,
-                        inflow_rate=float(out[K.O_IN]), outflow_rate=float(out[K.O_OUT]), mass=mass,
-                        mass_change_rate=float(out[K.O_ACC]), courant=float(out[K.O_COURANT]))
+                        inflow_rate=o[K.O_IN], outflow_rate=o[K.O_OUT], mass=o[K.O_MASS],
+                        mass_change_rate=o[K.O_ACC], courant=o[K.O_COURANT])
+
+    def _input(self, name, value, face_shape, slot, centre_ok=True):
+        """(mode, array) of a step input for ``K.load_inputs``: K.IN_NONE, IN_SCALAR (the number in a
+        1 × 1 array), IN_CENTRE or IN_FACE with a C-contiguous float64 array; a CaseError for a wrong shape."""
+        if value is None:
+            return K.IN_NONE, self._none
+        a = value if type(value) is np.ndarray else np.asarray(value, float)
+        if a.ndim == 0:
+            buf = self._scalars[slot]
+            buf[0, 0] = a
+            return K.IN_SCALAR, buf
+        if a.dtype != _F64 or not a.flags.c_contiguous:
+            a = np.ascontiguousarray(a, dtype=float)
+        if a.shape == face_shape:
+            return K.IN_FACE, a
+        if centre_ok and a.shape == self._shapes[0]:
+            return K.IN_CENTRE, a
+        self._face_array(name, a, face_shape, centre_ok)  # raises the CaseError of a wrong shape
+        raise AssertionError("unreachable")
 
     def _factorise(self) -> None:
         """Factorise the assembled pressure-correction matrix (SuperLU) and keep its factors as CSC arrays
@@ -697,6 +826,7 @@ class GasSolver:
         self._lu_data[:] = self._data
         self._ipar[K.I_HAVE_LU] = 1
         self._ipar[K.I_NFACT] += 1
+        self._set_iterate_args()
 
     @property
     def factorisations(self) -> int:
@@ -705,8 +835,14 @@ class GasSolver:
 
     @property
     def linear_solver(self) -> str:
-        """'band' (compiled band LU) or 'superlu' (SciPy), whichever factorises the pressure matrix now."""
-        return "band" if self._ipar[K.I_BANDED] else "superlu"
+        """'band' (compiled band LU), 'multigrid' (compiled GMRES with a multigrid preconditioner) or
+        'superlu' (SciPy), whichever solves the pressure-correction equations now."""
+        return {K.SOLVER_BAND: "band", K.SOLVER_MULTIGRID: "multigrid"}.get(int(self._ipar[K.I_SOLVER]), "superlu")
+
+    @property
+    def krylov_iterations(self) -> int:
+        """GMRES iterations so far (multigrid path; 0 otherwise)."""
+        return int(self._ipar[K.I_KRYLOV])
 
     # ------------------------------------------------------------ helpers
     def max_time_step(self, state: GasState, courant: float = 0.5) -> float:

@@ -324,7 +324,7 @@ class Simulation:
                        collisions_per_s=h["collisions"] / self.wall_time if self.wall_time > 0 else None,
                        collapse_remedy_count=h["remedy_count"],
                        dissipated_energy_J=h["dissipated_normal_J"] + h["dissipated_tangential_J"])
-            if self.energy0:
+            if self.energy0 and self.gas is None:  # with gas, the gas does work on the particles
                 # Hoomans 1996 eq. 51: relative error of E_kin + E_pot + E_rot + E_dsp
                 out["energy_error_rel"] = abs(h["total_energy_J"] - self.energy0) / abs(self.energy0)
         if self.gas is not None:

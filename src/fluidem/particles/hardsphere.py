@@ -1,0 +1,288 @@
+"""Event-driven hard-sphere engine (Hoomans et al. 1996): owns particle state, collision laws and walls.
+
+``HardSphereEngine.advance(nsteps)`` runs that many force steps DT in one compiled call
+(``_hardsphere_kernels.advance``): each step adds (g + F/m) DT to every velocity
+(Hoomans eqs 33–34), then processes the binary collisions inside DT one at a time in
+time order with free flight in between (eqs 30–32, Fig. 3), each by eqs 10–29. The
+interface is that of ``SoftSphereEngine`` so that ``Simulation``, the gas coupling
+(``ext_force``) and checkpoints work unchanged; the engine also runs on its own.
+"""
+from __future__ import annotations
+
+import numpy as np
+from pydantic import ValidationError
+
+from ..errors import CaseError
+from ..state import ParticleState
+from . import _hardsphere_kernels as K
+from .contact.base import N_SLOTS
+from .contact.hard_sphere import HardSphere
+from .placement import place
+from .softsphere import SoftSphereEngine
+from .walls import build_walls
+
+DEFAULT_DT = 1e-4  # s, Hoomans 1996 DT (Table 2, §5.1)
+DEFAULT_SKIN_DIAMETERS = 0.5  # neighbour-list skin in largest diameters when neighbours.skin is not given
+
+
+class CollisionCascadeError(FloatingPointError):
+    """More events in one step than ``max_events_per_step``: an inelastic collapse or a jammed cluster.
+
+    A ``FloatingPointError`` so that ``Simulation.run`` records it as the run's error and
+    keeps a consistent checkpoint (the engine is left at the start of the failing call).
+    """
+
+
+class HardSphereEngine:
+    """Hard-sphere particles with instantaneous binary collisions (Hoomans 1996 §2.3–2.5).
+
+    Attributes besides the soft-sphere interface (``case, dim2, walls, state, inv_mass,
+    gravity, ext_force, wall_point0, wall_normal, wall_motion, dt, time, steps, rebuilds``):
+
+    collisions, wall_collisions : int, cumulative collision counts (wall ones included in the first)
+    sticking_collisions : int, collisions of the sticking class (eq. 25)
+    dissipated_normal_J, dissipated_tangential_J : float, sums of eq. 23 and of eqs 27/29 [J]
+    remedy_count : int, collisions made elastic and frictionless by the TC model
+    events : int, all processed events (collisions, stale predictions, list rebuilds)
+    skin : float, neighbour-list skin [m]
+    max_events_per_step : int, a step with more events raises ``CollisionCascadeError``
+    """
+
+    law_for_pair = SoftSphereEngine.law_for_pair  # species-pair overrides, exactly as for soft spheres
+    law_for_wall = SoftSphereEngine.law_for_wall  # wall_contact, per-wall contact, wall_pairs
+
+    def __init__(self, case, state: ParticleState | None = None):
+        self.case = case
+        self.dim2 = case.particles.dimensions == 2
+        self.walls = build_walls(case)
+        self.wall_point0, self.wall_normal, self.wall_motion = self.walls.arrays()
+        for k, plane in enumerate(self.walls.planes):
+            if int(self.wall_motion[k, 0]) != 0:
+                raise CaseError(
+                    f"walls: wall {plane.source.name!r} moves ({plane.source.motion.kind}); the hard-sphere engine "
+                    f"supports static walls only; remove its motion or use a soft-sphere contact model")
+        if state is None:
+            pos, vel, diam, spec = place(case, self.walls)
+            dens = np.array([s.density for s in case.particles.species])
+            state = ParticleState.create(pos, vel, diam, spec, dens)
+        self.state = state
+        st = state
+        self.inv_mass = 1.0 / st.mass
+        self.inv_inertia = 1.0 / st.inertia
+        self.gravity = np.array(case.gravity, float)
+        self.ext_force = np.zeros_like(st.position)
+        self.pp, self.pw = self._contact_tables()
+        self.dt = case.time.dt if case.time.dt is not None else DEFAULT_DT
+        dmax = 2.0 * float(st.radius.max()) if st.n else 0.0
+        self.skin = case.neighbours.skin if case.neighbours.skin is not None else DEFAULT_SKIN_DIAMETERS * dmax
+        if st.n and not self.skin > 0:
+            raise CaseError("neighbours.skin must be positive for the hard-sphere engine")
+        self.max_events_per_step = 1_000_000 + 10_000 * st.n
+        self.time = 0.0
+        self.steps = 0
+        self.counters = np.zeros(K.N_COUNTERS, np.int64)
+        self.energy = np.zeros(K.N_ENERGIES)
+        self.last_collision = np.full(st.n, -np.inf)  # absolute time of each particle's last collision [s]
+        self.ref_pos = st.position.copy()
+        self.nbr_start, self.nbr = K.build_neighbours(st.position, st.radius, self.skin, self.dim2)
+        self.event_log = np.zeros((0, 5))  # see record_collisions()
+        # what analysis/probes.py reads from a particle engine: no lasting contacts between hard spheres
+        self.row_start = np.zeros(st.n + 1, np.int64)
+        self.partner = np.zeros(0, np.int32)
+        self.wall_hist = np.zeros((st.n, len(self.walls.planes), 3))
+        self._update_force()
+
+    # ------------------------------------------------------------ set-up
+    def _contact_tables(self):
+        """Packed hard-sphere rows per species pair (S, S, 8) and per species–wall plane (S, W, 8)."""
+        sp = self.case.particles.species
+        ns, nw = len(sp), len(self.walls.planes)
+        pp = np.zeros((ns, ns, N_SLOTS))
+        pw = np.zeros((ns, max(nw, 1), N_SLOTS))
+        try:
+            for a in range(ns):
+                for b in range(ns):
+                    pp[a, b] = self._hard(self.law_for_pair(a, b), f"species {sp[a].name}–{sp[b].name}").pack(
+                        sp[a], sp[b])
+                for w, plane in enumerate(self.walls.planes):
+                    pw[a, w] = self._hard(self.law_for_wall(plane, a), f"species {sp[a].name}–wall {plane.name}").pack(
+                        sp[a], plane.source)
+        except ValidationError as err:
+            bad = "; ".join(f"{'.'.join(str(x) for x in e['loc'])}: {e['msg']}" for e in err.errors())
+            raise CaseError(f"particles.pairs / wall_pairs / walls.contact: invalid hard-sphere override ({bad}); "
+                            f"hard spheres take restitution and friction only") from None
+        return pp, pw
+
+    @staticmethod
+    def _hard(law, what):
+        if not isinstance(law, HardSphere):
+            raise CaseError(f"particles.contact: the law of {what} is {law.model!r}; the hard-sphere engine needs "
+                            f"model = 'hard_sphere' for every pair and wall")
+        return law
+
+    def check_initial_overlaps(self, tolerance: float = 1e-9) -> None:
+        """Raise CaseError if two particles, or a particle and a wall, overlap at the start."""
+        st = self.state
+        rs, nbr = K.build_neighbours(st.position, st.radius, 0.0, self.dim2)
+        if nbr.size:
+            i = np.repeat(np.arange(st.n), np.diff(rs))
+            j = nbr.astype(np.int64)
+            keep = i < j
+            i, j = i[keep], j[keep]
+            d = np.linalg.norm(st.position[i] - st.position[j], axis=1)
+            ov = st.radius[i] + st.radius[j] - d
+            bad = np.flatnonzero(ov > tolerance * (st.radius[i] + st.radius[j]))
+            if bad.size:
+                k = bad[np.argmax(ov[bad])]
+                raise CaseError(
+                    f"particles.placement: initial particles overlap: {bad.size} pair(s), e.g. particles {i[k]} and "
+                    f"{j[k]} by {ov[k]:.3g} m; particles must start apart")
+        for plane in self.walls.planes:
+            gap = (st.position - plane.point) @ plane.normal - st.radius
+            bad = np.flatnonzero(gap < -tolerance * st.radius)
+            if bad.size:
+                raise CaseError(
+                    f"particles.placement: initial particles cross wall {plane.name}: {bad.size} particle(s), e.g. "
+                    f"particle {bad[0]} by {-gap[bad[0]]:.3g} m")
+
+    def record_collisions(self, capacity: int) -> None:
+        """Record the next ``capacity`` collisions in ``event_log`` (for tests and analysis).
+
+        Rows: (absolute time [s], particle a, partner b (>= 0) or wall code −3 − w, E_n [J], E_t [J]).
+        """
+        self.event_log = np.zeros((int(capacity), 5))
+        self.counters[K.C_LOGGED] = 0
+
+    @property
+    def logged(self) -> np.ndarray:
+        """The recorded collisions so far (rows of ``event_log``)."""
+        return self.event_log[: self.counters[K.C_LOGGED]]
+
+    # ------------------------------------------------------------ stepping
+    def _update_force(self) -> None:
+        """state.force = m g + ext_force (the finite forces of eq. 34); no torques between collisions."""
+        st = self.state
+        st.force[...] = st.mass[:, None] * self.gravity[None, :] + self.ext_force
+        st.torque[...] = 0.0
+
+    def advance(self, nsteps: int) -> None:
+        """Run ``nsteps`` force steps of ``self.dt`` in one compiled call."""
+        if nsteps <= 0:
+            return
+        st = self.state
+        if st.n == 0:
+            self.steps += nsteps
+            self.time = self.steps * self.dt
+            return
+        saved = self._copy()
+        info = np.zeros(3)
+        self.nbr_start, self.nbr, status = K.advance(
+            st.position, st.velocity, st.omega, st.radius, self.inv_mass, self.inv_inertia, st.species, self.pp,
+            self.pw, self.wall_point0, self.wall_normal, self.gravity, self.ext_force, self.dim2, self.nbr_start,
+            self.nbr, self.ref_pos, self.skin, self.last_collision, self.steps, self.dt, nsteps,
+            self.max_events_per_step, self.counters, self.energy, self.event_log, info)
+        if status != K.OK:
+            self._paste(saved)
+            step = self.steps + int(info[0])
+            raise CollisionCascadeError(
+                f"hard-sphere engine: more than {self.max_events_per_step} events in step {step} "
+                f"(t = {step * self.dt + info[1]:.6g} s). With particles.contact.collapse_time = 0 this is an "
+                f"inelastic collapse of a dense cluster: switch on the TC remedy (collapse_time = 1e-5); with the "
+                f"remedy on ({self.case.particles.contact.collapse_time:g} s now) it is a jam of particles between "
+                f"walls kept elastic by it: set collapse_time = 0. A smaller time step also helps. The particles "
+                f"are left as they were at t = {self.time:.6g} s")
+        self.steps += nsteps
+        self.time = self.steps * self.dt
+        self._update_force()
+
+    _SAVED = ("ref_pos", "last_collision", "counters", "energy", "nbr_start", "nbr")
+
+    def _copy(self) -> dict:
+        out = {k: v.copy() for k, v in self.state.arrays().items() if k in ("position", "velocity", "omega")}
+        out.update({k: getattr(self, k).copy() for k in self._SAVED})
+        return out
+
+    def _paste(self, saved: dict) -> None:
+        for k in ("position", "velocity", "omega"):
+            getattr(self.state, k)[...] = saved[k]
+        for k in self._SAVED:
+            setattr(self, k, saved[k])
+
+    # ------------------------------------------------------------ counters and energies
+    @property
+    def collisions(self) -> int:
+        return int(self.counters[K.C_COLLISIONS])
+
+    @property
+    def wall_collisions(self) -> int:
+        return int(self.counters[K.C_WALL_COLLISIONS])
+
+    @property
+    def sticking_collisions(self) -> int:
+        return int(self.counters[K.C_STICKING])
+
+    @property
+    def remedy_count(self) -> int:
+        return int(self.counters[K.C_REMEDY])
+
+    @property
+    def events(self) -> int:
+        return int(self.counters[K.C_EVENTS])
+
+    @property
+    def rebuilds(self) -> int:
+        return int(self.counters[K.C_REBUILDS])
+
+    @property
+    def dissipated_normal_J(self) -> float:
+        return float(self.energy[K.E_NORMAL])
+
+    @property
+    def dissipated_tangential_J(self) -> float:
+        return float(self.energy[K.E_TANGENTIAL])
+
+    def energies(self) -> dict[str, float]:
+        """Kinetic, rotational, potential (−Σ m g·x, relative to the origin) and dissipated energy [J].
+
+        Their sum is Hoomans' E_tot (1996 eq. 51), constant up to the O(DT) error of eqs 32–34
+        when no gas acts.
+        """
+        st = self.state
+        ke = 0.5 * float(np.sum(st.mass * np.einsum("ij,ij->i", st.velocity, st.velocity)))
+        re = 0.5 * float(np.sum(st.inertia * np.einsum("ij,ij->i", st.omega, st.omega)))
+        pe = -float(np.sum(st.mass * (st.position @ self.gravity)))
+        diss = self.dissipated_normal_J + self.dissipated_tangential_J
+        return {"kinetic_J": ke, "rotational_J": re, "potential_J": pe, "dissipated_J": diss,
+                "total_J": ke + re + pe + diss}
+
+    # ------------------------------------------------------------ checkpoint
+    def checkpoint_arrays(self) -> dict[str, np.ndarray]:
+        """Everything needed to continue bit-for-bit."""
+        out = {f"state/{k}": v for k, v in self.state.arrays().items()}
+        out.update({
+            "engine/ref_pos": self.ref_pos, "engine/nbr_start": self.nbr_start, "engine/nbr": self.nbr,
+            "engine/last_collision": self.last_collision, "engine/counters": self.counters,
+            "engine/energy": self.energy, "engine/ext_force": self.ext_force,
+        })
+        return out
+
+    def checkpoint_scalars(self) -> dict:
+        return {"steps": self.steps, "dt": self.dt, "rebuilds": self.rebuilds, "collisions": self.collisions,
+                "skin": self.skin}
+
+    def restore(self, arrays: dict[str, np.ndarray], scalars: dict) -> None:
+        for k in self.state.arrays():
+            getattr(self.state, k)[...] = arrays[f"state/{k}"]
+        for k in ("ref_pos", "last_collision", "ext_force", "counters", "energy"):
+            getattr(self, k)[...] = arrays[f"engine/{k}"]
+        self.nbr_start = np.ascontiguousarray(arrays["engine/nbr_start"], dtype=np.int64)
+        self.nbr = np.ascontiguousarray(arrays["engine/nbr"], dtype=np.int32)
+        self.counters[K.C_LOGGED] = 0
+        self.event_log = np.zeros((0, 5))
+        self.dt = float(scalars["dt"])
+        self.skin = float(scalars.get("skin", self.skin))
+        self.steps = int(scalars["steps"])
+        self.time = self.steps * self.dt
+        self.inv_mass = 1.0 / self.state.mass
+        self.inv_inertia = 1.0 / self.state.inertia
+        self._update_force()

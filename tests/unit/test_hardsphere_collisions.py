@@ -282,8 +282,8 @@ def test_wall_collision_is_a_pair_with_an_infinite_mass(make_case, dimensions, v
     e0 = kinetic(eng)
     eng.advance(1)
     m = eng.state.mass[0]
-    va1, _, wa1, _, Ey, Ex, sliding, chk = paper_2d(v[:2], np.zeros(2), w, 0.0, np.array([0.0, 1.0]), R, R, m,
-                                                    math.inf, ew, muw)
+    va1, _, wa1, _, Ey, Ex, sliding, _ = paper_2d(v[:2], np.zeros(2), w, 0.0, np.array([0.0, 1.0]), R, R, m,
+                                                  math.inf, ew, muw)
     assert sliding == slides
     assert eng.collisions == 1 and eng.wall_collisions == 1
     close(eng.state.velocity[0, :2], va1, 1.0)

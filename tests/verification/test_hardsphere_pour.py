@@ -71,7 +71,7 @@ def energy_errors():
         e0 = eng.energies()["total_J"]
         rot = 0.0
         for _ in range(12):
-            eng.advance(int(round(0.01 / dt)))
+            eng.advance(round(0.01 / dt))
             rot = max(rot, eng.energies()["rotational_J"] / e0)
         out[dt] = {"error": relative_energy_error(eng, e0), "rotational": rot, "collisions": eng.collisions,
                    "overlap": max_overlap(eng), "time": eng.time}

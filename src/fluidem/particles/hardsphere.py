@@ -46,6 +46,10 @@ class HardSphereEngine:
     events : int, all processed events (collisions, stale predictions, list rebuilds)
     skin : float, neighbour-list skin [m]
     max_events_per_step : int, a step with more events raises ``CollisionCascadeError``
+        (default 10⁶ + 10⁴ N: seconds of work, far above the 10–10³ collisions per particle and
+        step of a settling bed)
+    event_log, logged : collisions recorded after ``record_collisions(capacity)``
+    row_start, partner, wall_hist, pw : what ``analysis.probes`` reads (no lasting contacts)
     """
 
     law_for_pair = SoftSphereEngine.law_for_pair  # species-pair overrides, exactly as for soft spheres
@@ -184,13 +188,17 @@ class HardSphereEngine:
         if status != K.OK:
             self._paste(saved)
             step = self.steps + int(info[0])
+            tc = self.pp[0, 0, K.SLOT_COLLAPSE_TIME]
             raise CollisionCascadeError(
                 f"hard-sphere engine: more than {self.max_events_per_step} events in step {step} "
-                f"(t = {step * self.dt + info[1]:.6g} s). With particles.contact.collapse_time = 0 this is an "
-                f"inelastic collapse of a dense cluster: switch on the TC remedy (collapse_time = 1e-5); with the "
-                f"remedy on ({self.case.particles.contact.collapse_time:g} s now) it is a jam of particles between "
-                f"walls kept elastic by it: set collapse_time = 0. A smaller time step also helps. The particles "
-                f"are left as they were at t = {self.time:.6g} s")
+                f"(t = {step * self.dt + info[1]:.6g} s): a collision cascade that does not end, typically in a "
+                f"bed at rest without gas (see particles/contact/hard_sphere.py). "
+                + ("The TC remedy is off: an inelastic collapse; try particles.contact.collapse_time = 1e-5. "
+                   if tc == 0 else
+                   f"The TC remedy is on (collapse_time = {tc:g} s): equal spheres jammed in a row between walls "
+                   f"stay elastic under it; try collapse_time = 0. ")
+                + f"A box width that is not a whole number of diameters, a size distribution or a smaller "
+                  f"time.dt also help. The particles are left as they were at t = {self.time:.6g} s")
         self.steps += nsteps
         self.time = self.steps * self.dt
         self._update_force()

@@ -39,6 +39,8 @@ import math
 import numpy as np
 from numba import njit
 
+from ._neighbours_kernels import _bin, _cell_grid
+
 # predicted-event codes in ev_part: >= 0 partner particle, then:
 NO_EVENT = -1
 SKIN_EVENT = -2
@@ -73,50 +75,8 @@ def build_neighbours(pos, radius, skin, dim2):
     start = np.zeros(n + 1, dtype=np.int64)
     if n == 0:
         return start, np.empty(0, dtype=np.int32)
-    lo = np.empty(3)
-    hi = np.empty(3)
-    for d in range(3):
-        lo[d] = np.inf
-        hi[d] = -np.inf
-    rmax = 0.0
-    for i in range(n):
-        for d in range(3):
-            x = pos[i, d]
-            lo[d] = min(lo[d], x)
-            hi[d] = max(hi[d], x)
-        rmax = max(rmax, radius[i])
-    size = 2.0 * rmax + skin
-    ncell = np.ones(3, dtype=np.int64)
-    while True:  # coarser cells if stray particles would make the grid too large
-        total = 1
-        for d in range(3):
-            ncell[d] = 1 if (dim2 and d == 2) else max(1, int((hi[d] - lo[d]) / size))
-            total *= ncell[d]
-        if total <= 4 * n + 64:
-            break
-        size *= 1.5
-    inv = np.empty(3)
-    for d in range(3):
-        ext = hi[d] - lo[d]
-        inv[d] = ncell[d] / ext if ext > 0 else 0.0
-    ntot = ncell[0] * ncell[1] * ncell[2]
-    cell = np.empty(n, dtype=np.int64)
-    cstart = np.zeros(ntot + 1, dtype=np.int64)
-    for i in range(n):
-        c = 0
-        for d in range(3):
-            k = int((pos[i, d] - lo[d]) * inv[d])
-            k = min(max(k, 0), ncell[d] - 1)
-            c = c * ncell[d] + k
-        cell[i] = c
-        cstart[c + 1] += 1
-    for c in range(ntot):
-        cstart[c + 1] += cstart[c]
-    fill = cstart[:-1].copy()
-    members = np.empty(n, dtype=np.int64)
-    for i in range(n):
-        members[fill[cell[i]]] = i
-        fill[cell[i]] += 1
+    lo, inv, ncell = _cell_grid(pos, radius, skin, dim2)  # cells >= 2 R_max + skin, as the soft engine's
+    cell, cstart, members = _bin(pos, lo, inv, ncell)
     nbr = np.empty(0, dtype=np.int32)
     for phase in range(2):  # 0: count, 1: write
         for i in range(n):

@@ -197,10 +197,11 @@ def random_gas(grid, seed):
                     u=rng.normal(0.0, 1.5, fu), v=rng.normal(1.0, 3.0, fv), voidage=rng.uniform(0.2, 1.0, c))
 
 
-def coupling(drag, mapping, pgf=True, dim2=True, n=600, seed=11, random_state=True):
+def coupling(drag, mapping, pgf=True, dim2=True, n=600, seed=11, random_state=True, exchange="cell_beta"):
     """GasCoupling of the tsuji-jet case over a stand-in engine holding random particles."""
     case = fd.load_case("tsuji-jet").with_overrides({"coupling.drag": drag, "coupling.voidage": mapping,
-                                                      "coupling.pressure_gradient_force": pgf})
+                                                      "coupling.pressure_gradient_force": pgf,
+                                                      "coupling.momentum_exchange": exchange})
     grid_probe = case.gas.build(case.gravity).grid
     pos, radius, vel = random_particles(grid_probe, n, seed)
     state = SimpleNamespace(position=pos, radius=radius, velocity=vel, force=np.zeros_like(pos), n=n)

@@ -1,25 +1,38 @@
-"""Two-way coupling of the gas and the soft-sphere particles, one gas step DT at a time.
+"""Two-way coupling of the gas and the particles, one gas step DT at a time.
 
 At the start of every gas step (every ``substeps`` DEM steps):
 
 1. particles → grid: voidage ε and cell-averaged solids velocity v_s (``VoidageMapping``,
    Sun 2007 eqs 34-35 / Hoomans 1996 eqs 49-50);
-2. gas from t to t + DT with the implicit interphase term −β(u − v_s), β cell-averaged with
-   the cell's ε, the slip |u_cell − v_s| and each particle's diameter (Sun 2007 eq. 33);
-3. grid → particles: gas velocity, voidage, density and pressure gradient at each centre
-   (Hoomans 1996 eqs 40-41); the engine's ``ext_force`` becomes the drag
-   β V_p/(1 − ε) (u − v_p) (Sun 2007 eq. 29) plus −V_p ∇p when enabled (Sun 2007 eq. 28);
-4. the DEM sub-steps of DT (the engine's dt is DT / ceil(DT / dt_DEM)).
+2. the interphase coefficient the gas takes, by ``coupling.momentum_exchange``:
+   ``"particle"`` (default): each particle's drag coefficient K_p = β/(1 − ε) V_p at its own
+   interpolated ε and slip (Sun 2007 eq. 29), summed onto the faces with the weights that
+   interpolate the gas velocity to the particle (``_paired_kernels.deposit``);
+   ``"cell"`` and ``"cell_beta"``: β per cell from the cell's ε and the slip |u_cell − v_s|
+   (Sun 2007 eq. 33);
+3. gas from t to t + DT with the implicit interphase term −β(u − v_s);
+4. grid → particles (Hoomans 1996 eqs 40-41), the engine's ``ext_force`` becomes
+   ``"particle"``: K_p (u_p − v_p) with the gas of t + DT, the same K_p and weights, so that
+   the particles gain exactly the momentum the gas lost (Σ_f w_pf = 1);
+   ``"cell"``: the cell's drag β V_cell (u_cell − v_s) shared in proportion to V_p, again
+   exactly the gas's loss;
+   ``"cell_beta"``: each particle's own drag β V_p/(1 − ε) (u − v_p) — as MFIX in Sun 2007,
+   where "particle and gas drag agree only approximately" (the assumption after eq. 35);
+   plus −V_p ∇p when enabled (Sun 2007 eq. 28);
+5. the DEM sub-steps of DT (the engine's dt is DT / ceil(DT / dt_DEM)).
 
-With ``drag_update = "substep"`` step 3 is repeated before every sub-step with the current
-positions and velocities in the gas field of t + DT. The gas sees the drag through β only,
-so, as in Sun 2007 (the assumption after eq. 35), particle and gas drag agree only
-approximately. The phase within DT is ``engine.steps % substeps``, so a run can stop
-(observers, checkpoints) after any DEM step and continue exactly.
+Drag a particle hands to a face whose velocity the gas does not solve (a wall, an inflow) is
+momentum exchanged with that boundary. ``exchange_balance`` reports the three sums.
 
-Steps 1 and 3 and the β of step 2 are one compiled call each (``_voidage_kernels.map_solids``,
-``_exchange_kernels.cell_beta``, ``_exchange_kernels.gas_forces``), the drag law chosen by its
-integer code; this module only hands them arrays.
+With ``drag_update = "substep"`` step 4 is repeated before every sub-step with the current
+positions and velocities in the gas field of t + DT (``"particle"`` keeps K_p of the step;
+``"cell_beta"`` re-evaluates it), which makes the pairing approximate. The phase within DT
+is ``engine.steps % substeps``, so a run can stop (observers, checkpoints) after any DEM step
+and continue exactly.
+
+Every step above is one compiled call (``_voidage_kernels.map_solids``, ``_paired_kernels``,
+``_exchange_kernels``), the drag law chosen by its integer code; this module only hands
+them arrays.
 """
 from __future__ import annotations
 
@@ -28,7 +41,9 @@ import math
 import numpy as np
 
 from ..gas.solver import GasState
+from ..gas import _solver_kernels as SK
 from . import _exchange_kernels as K
+from . import _paired_kernels as P
 from . import interpolation as I
 
 GAS_KEYS = ("p", "rho", "u", "v", "voidage")
@@ -62,6 +77,14 @@ class GasCoupling:
         engine.time = engine.steps * engine.dt
         st = engine.state
         self.volume = math.pi / 6.0 * (2.0 * st.radius) ** 3
+        self.exchange = self.options.momentum_exchange
+        ipar = self.solver._ipar
+        self._periodic = (bool(ipar[SK.I_PX]), bool(ipar[SK.I_PY]))
+        gd = self.grid
+        self._faces = tuple(np.zeros(gd.u_shape) for _ in range(2)) + tuple(np.zeros(gd.v_shape) for _ in range(2))
+        self._kp = np.zeros(st.radius.shape)  # K_p of the "particle" exchange [kg/s]
+        self._cell_inputs = None  # β, v_s,x, v_s,y per cell of the "cell" exchange
+        self._paired_ready = False  # K_p / cell inputs of a gas step at hand (else forces as "cell_beta")
         xc, yc = I._axes(self.grid, "centre")[:2]
         self._nodes = (xc, yc, self.grid.x_faces, self.grid.y_faces)  # interpolation nodes, Hoomans eqs 40-41
         smap = self._map()
@@ -70,6 +93,7 @@ class GasCoupling:
         self.last_info = None
         self.last_map = smap
         self.last_beta = None
+        self.last_face_beta = None
         self.clipped = smap.clipped
 
     # ------------------------------------------------------------ pieces
@@ -109,7 +133,7 @@ class GasCoupling:
         self._gas_forces(out, _NO_TOTAL)
         return out
 
-    def _gas_forces(self, out, total) -> None:
+    def _gas_forces(self, out, total, pressure=None) -> None:
         """``particle_forces`` into ``out``; ``total`` (N, 3) follows the change of ``out`` ((0, 3): none)."""
         st, gs, gd = self._particles(), self.state, self.grid
         self._check_gas()
@@ -118,7 +142,8 @@ class GasCoupling:
                              f"{st.position.shape[0]}")
         bad = K.gas_forces(self.drag.code, st.position, st.velocity, st.radius, self.volume, gs.u, gs.v,
                            gs.voidage, gs.rho, gs.p, self.solver.props.viscosity, *self._nodes, gd.dx, gd.dy,
-                           self.mapping.minimum_voidage, bool(self.options.pressure_gradient_force),
+                           self.mapping.minimum_voidage,
+                           bool(self.options.pressure_gradient_force if pressure is None else pressure),
                            bool(self.engine.dim2), out, total)
         if bad:
             raise ValueError(f"particle drag: arguments out of range for {bad} particles "
@@ -145,16 +170,56 @@ class GasCoupling:
                 raise ValueError(f"gas state {k}: expected {shape} float64, got {a.shape} {a.dtype}")
 
     def gas_step(self) -> None:
-        """Steps 1-3 of the module docstring: map, advance the gas by DT, set the particle forces."""
+        """Steps 1-4 of the module docstring: map, the gas's β, advance the gas by DT, the particle forces."""
         smap = self._map()
         self.clipped = smap.clipped
-        beta = self.cell_beta(smap.voidage, smap.solids_u, smap.solids_v)
-        self.last_map, self.last_beta = smap, beta
         t = self.gas_steps * self.gas_dt
+        if self.exchange == "particle":
+            beta, us, vs = self._deposit(smap.voidage)
+        else:
+            cb = self.cell_beta(smap.voidage, smap.solids_u, smap.solids_v)
+            self._cell_inputs = (cb, smap.solids_u, smap.solids_v)
+            if self.exchange == "cell":
+                bu, su, bv, sv = self._faces
+                P.cell_faces(cb, smap.solids_u, smap.solids_v, *self._periodic, bu, su, bv, sv)
+                beta, us, vs = (bu, bv), su, sv
+            else:
+                beta, us, vs = cb, smap.solids_u, smap.solids_v
+        self.last_map = smap
+        self.last_face_beta = beta if isinstance(beta, tuple) else None
+        self.last_beta = self._cell_beta_of_kp() if self.exchange == "particle" else self._cell_inputs[0]
         self.last_info = self.solver.advance(self.state, self.gas_dt, t, voidage=smap.voidage, beta=beta,
-                                             solids_u=smap.solids_u, solids_v=smap.solids_v)
+                                             solids_u=us, solids_v=vs)
         self.gas_steps += 1
+        self._paired_ready = True
         self.set_particle_forces()
+
+    def _deposit(self, voidage):
+        """K_p and the face β, u_s of the "particle" exchange at the current particles and gas (step 2)."""
+        st, gs, gd = self._particles(), self.state, self.grid
+        self._check_gas()
+        if self._kp.shape != st.radius.shape:
+            self._kp = np.zeros(st.radius.shape)
+        au, bu_, av, bv_ = self._faces
+        bad = P.deposit(self.drag.code, st.position, st.velocity, st.radius, self.volume, gs.u, gs.v, voidage,
+                        gs.rho, self.solver.props.viscosity, gd.dx, gd.dy, self.mapping.minimum_voidage,
+                        *self._periodic, self._kp, au, bu_, av, bv_)
+        if bad:
+            raise ValueError(f"particle drag: arguments out of range for {bad} particles "
+                             "(voidage must lie in (0, 1], gas density > 0)")
+        vol = gd.cell_volume
+        us = np.divide(bu_, au, out=np.zeros_like(au), where=au > 0.0)
+        vs = np.divide(bv_, av, out=np.zeros_like(av), where=av > 0.0)
+        return (au / vol, av / vol), us, vs
+
+    def _cell_beta_of_kp(self) -> np.ndarray:
+        """β per cell [kg m^-3 s^-1] of the "particle" exchange: Σ_{p in cell} K_p / V_cell (as Sun 2007
+        eq. 33 sums it), for output; the gas itself took the face values."""
+        gd, pos = self.grid, self.engine.state.position
+        i = np.clip((pos[:, 0] / gd.dx).astype(np.int64), 0, gd.nx - 1)
+        j = np.clip((pos[:, 1] / gd.dy).astype(np.int64), 0, gd.ny - 1)
+        out = np.bincount(i * gd.ny + j, weights=self._kp, minlength=gd.nx * gd.ny)
+        return out.reshape(gd.shape) / gd.cell_volume
 
     def set_particle_forces(self) -> None:
         """ext_force ← the gas force; the engine's stored total force (used by the next half kick) follows.
@@ -163,7 +228,63 @@ class GasCoupling:
         out of range raise ValueError after the pass (those particles' forces are then NaN).
         """
         eng = self.engine
-        self._gas_forces(eng.ext_force, eng.state.force)
+        self._forces(eng.ext_force, eng.state.force)
+
+    def _forces(self, out, total, pressure=None) -> None:
+        """The gas force of this step's exchange into ``out`` (``total`` follows, or (0, 3))."""
+        pressure = self.options.pressure_gradient_force if pressure is None else pressure
+        if self.exchange == "cell_beta" or not self._paired_ready:
+            self._gas_forces(out, total, pressure)
+            return
+        st, gs, gd = self._particles(), self.state, self.grid
+        self._check_gas()
+        if self.exchange == "particle":
+            P.particle_forces(st.position, st.velocity, self.volume, self._kp, gs.u, gs.v, gs.p, gd.dx, gd.dy,
+                              *self._periodic, bool(pressure), bool(self.engine.dim2), out, total)
+        else:
+            P.cell_forces(st.position, st.velocity, self.volume, *self._cell_inputs, gs.u, gs.v, gs.p, gd.dx, gd.dy,
+                          gd.cell_volume, *self._periodic, bool(pressure), bool(self.engine.dim2), out, total)
+
+    def exchange_balance(self) -> dict[str, np.ndarray]:
+        """Drag of the last gas step, (x, y) [N]: ``gas`` Σ over the faces the gas solves of
+        V_f β_f (u_f − u_s,f) (what the gas lost), ``boundary`` the same over the other faces (wall,
+        inflow: exchanged with the boundary), ``particles`` Σ_p of the particle drag (without −V_p ∇p).
+        For ``"particle"`` and ``"cell"`` gas + boundary = particles to round-off, at the end of the
+        gas step (before the DEM sub-steps move the particles)."""
+        gd, gs = self.grid, self.state
+        if self.last_beta is None:
+            raise RuntimeError("exchange_balance: no gas step taken yet")
+        n = self.engine.state.position.shape[0]
+        drag = np.zeros((n, 3))
+        self._forces(drag, np.empty((0, 3)), pressure=False)
+        beta = self.last_face_beta if self.last_face_beta is not None else self.last_beta
+        if isinstance(beta, tuple):
+            bu, bv = beta
+        else:
+            bu, bv = np.empty(gd.u_shape), np.empty(gd.v_shape)
+            SK.centre_to_x_faces(beta, self._periodic[0], bu)
+            SK.centre_to_y_faces(beta, self._periodic[1], bv)
+        if self.exchange == "particle":
+            au, bu_, av, bv_ = self._faces
+            mu, mv = bu_ / gd.cell_volume, bv_ / gd.cell_volume  # β u_s on the faces
+        else:
+            smap = self.last_map
+            if self.exchange == "cell":
+                _, su, _, sv = self._faces
+            else:
+                su, sv = np.empty(gd.u_shape), np.empty(gd.v_shape)
+                SK.centre_to_x_faces(smap.solids_u, self._periodic[0], su)
+                SK.centre_to_y_faces(smap.solids_v, self._periodic[1], sv)
+            mu, mv = bu * su, bv * sv
+        fu = gd.cell_volume * (bu * gs.u - mu)
+        fv = gd.cell_volume * (bv * gs.v - mv)
+        solved_u = self.solver.ukind == SK.SOLVED
+        solved_v = self.solver.vkind == SK.SOLVED
+        copy_u = self.solver.ukind == SK.COPY
+        copy_v = self.solver.vkind == SK.COPY
+        gas = np.array([fu[solved_u].sum(), fv[solved_v].sum()])
+        boundary = np.array([fu[~(solved_u | copy_u)].sum(), fv[~(solved_v | copy_v)].sum()])
+        return {"gas": gas, "boundary": boundary, "particles": drag[:, :2].sum(axis=0)}
 
     # ------------------------------------------------------------ stepping
     def advance(self, nsteps: int) -> None:
@@ -185,7 +306,12 @@ class GasCoupling:
 
     # ------------------------------------------------------------ checkpoint
     def checkpoint_arrays(self) -> dict[str, np.ndarray]:
-        return {f"gas/{k}": v for k, v in self.state.arrays().items()}
+        out = {f"gas/{k}": v for k, v in self.state.arrays().items()}
+        if self._paired_ready and self.exchange == "particle":
+            out["coupling/kp"] = self._kp
+        if self._paired_ready and self.exchange == "cell":
+            out.update(zip(("coupling/cell_beta", "coupling/solids_u", "coupling/solids_v"), self._cell_inputs))
+        return out
 
     def checkpoint_scalars(self) -> dict:
         return {"gas_steps": self.gas_steps}
@@ -193,3 +319,11 @@ class GasCoupling:
     def restore(self, arrays: dict[str, np.ndarray], scalars: dict) -> None:
         self.state = GasState(**{k: np.ascontiguousarray(arrays[f"gas/{k}"], dtype=float) for k in GAS_KEYS})
         self.gas_steps = int(scalars["gas_steps"])
+        self._paired_ready = False
+        if self.exchange == "particle" and "coupling/kp" in arrays:
+            self._kp = np.ascontiguousarray(arrays["coupling/kp"], dtype=float)
+            self._paired_ready = True
+        if self.exchange == "cell" and "coupling/cell_beta" in arrays:
+            self._cell_inputs = tuple(np.ascontiguousarray(arrays[f"coupling/{k}"], dtype=float)
+                                      for k in ("cell_beta", "solids_u", "solids_v"))
+            self._paired_ready = True

@@ -3,16 +3,26 @@
 ``drag`` names a closure of the ``drag_laws`` registry; ``voidage`` is the particle → grid
 mapping (``VoidageMapping``: method, smoothing, velocity weighting, minimum voidage);
 ``pressure_gradient_force`` adds −V_p ∇p to each particle (Sun 2007 eq. 28);
+``momentum_exchange`` says how drag passes between the phases (``exchange.py``):
+``"particle"`` each particle's own drag (Sun 2007 eq. 29), and the gas receives exactly its
+opposite on the faces the particle's gas velocity was interpolated from; ``"cell"`` Sun's
+cell-averaged drag β V_cell (u − v_s), shared by the particles of the cell in proportion to
+their volume, the gas receiving its opposite; ``"cell_beta"`` the gas takes β of the
+cell-averaged slip while each particle takes its own drag — as MFIX in Sun 2007 (the
+assumption after eq. 35), not equal and opposite; kept to compare with it.
 ``drag_update`` says when the particle drag is re-evaluated: ``"frozen"`` once per gas
 step DT (one compiled call for all DEM sub-steps), ``"substep"`` every DEM sub-step with
 the particle's current position and velocity in the gas field of that DT (slower: one
-call per sub-step).
+call per sub-step; the drag coefficient of the "particle" exchange and the cell β of
+"cell" are kept from the step's start, and the gas has already taken its share, so the
+pairing of the two sides is then approximate).
 
 Example (TOML)::
 
     [coupling]
     drag = "hoomans1996"
     pressure_gradient_force = true
+    momentum_exchange = "particle"
     drag_update = "frozen"
     [coupling.voidage]
     method = "centroid"
@@ -35,6 +45,9 @@ class CouplingSection(BaseModel):
     drag: str = Field("hoomans1996", description="drag law by name (drag_laws registry)")
     voidage: VoidageMapping = Field(default_factory=VoidageMapping, description="particle → grid mapping")
     pressure_gradient_force: bool = Field(True, description="add −V_p ∇p to each particle (Sun 2007 eq. 28)")
+    momentum_exchange: Literal["particle", "cell", "cell_beta"] = Field(
+        "particle", description="drag per particle, paired with the gas (particle); Sun's cell-averaged drag "
+                                "shared in the cell (cell); or the unpaired MFIX 2007 form (cell_beta)")
     drag_update: Literal["substep", "frozen"] = Field("frozen", description="drag re-evaluated per DEM sub-step "
                                                                           "or once per gas step")
 

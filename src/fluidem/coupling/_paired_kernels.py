@@ -1,0 +1,345 @@
+"""Compiled kernels of the momentum-paired exchange (``exchange.py``, ``momentum_exchange``).
+
+``particle`` mode (Sun 2007's drag "from each particle's own velocity", eq. 29, made
+equal and opposite):
+
+``deposit``          before the gas step: each particle's drag coefficient
+                     K_p = β/(1 − ε_p) V_p [kg/s] at its interpolated ε_p and slip, and the
+                     face sums A_f = Σ_p w_pf K_p, B_f = Σ_p w_pf K_p v_p with the weights w_pf
+                     that interpolate the gas velocity to the particle (Hoomans 1996 eqs 40-41).
+                     The gas then takes β_f = A_f / V_f and u_s,f = B_f / A_f, implicitly.
+``particle_forces``  after the gas step: F_p = K_p (Σ_f w_pf u_f − v_p) − V_p ∇p_p.
+
+Because Σ_f w_pf = 1 for every particle, Σ_f V_f β_f (u_f − u_s,f) = Σ_p K_p (u_p − v_p):
+the gas loses exactly the momentum the particles gain, whatever the weights. Weights that
+reach a boundary node of the extended grid are folded back onto real nodes so they stay
+non-negative: the nearest node ("copy") at a wall, half to each of the two wrapped nodes on a
+periodic side (which is exact linear interpolation across it). Drag deposited on a face whose
+velocity the gas does not solve (a wall or inflow face) is momentum exchanged with that
+boundary.
+
+``cell`` mode (Sun 2007's cell-averaged drag shared by the particles of the cell):
+
+``cell_faces``      β and β u_s of the cells averaged onto faces (ghost cells count 0, so that
+                    every face carries half of each neighbouring cell's coefficient);
+``cell_forces``     D_c = β_c V_c (u_c − u_s,c), u_c the mean of the cell's two faces, shared by
+                    the particles whose centre lies in the cell in proportion to V_p.
+
+Σ_faces V (β_f u_f − (β u_s)_f) = Σ_c D_c exactly (each face is half of two cells).
+"""
+import math
+
+import numpy as np
+from numba import njit
+
+from ._exchange_kernels import _cell, _drag_arguments_valid
+from .drag._dispatch import beta_per_solids
+
+
+@njit(cache=True, inline="always")
+def _axis(x, inv_d, n, centred, periodic, idx, wt):
+    """Nodes of one axis around coordinate x and their weights (Hoomans 1996 eq. 41 in 1D).
+
+    ``centred``: nodes at the cell centres (k + ½) d, k = 0 … n − 1, extended by one node on each
+    wall (x = 0 and x = n d) whose weight is folded back: onto the nearest centre, or on a
+    periodic axis half onto each of the two centres the side joins. Otherwise nodes at the faces
+    k d, k = 0 … n (on a periodic axis face n is face 0). x is clamped to [0, n d]. Writes the
+    node indices and weights into idx, wt; returns how many (2 or 3). The weights sum to 1.
+    """
+    s = x * inv_d
+    if not s > 0.0:  # below the domain or NaN
+        s = 0.0
+    if s > n:
+        s = float(n)
+    if centred:
+        if n == 1:
+            idx[0] = 0
+            wt[0] = 1.0
+            idx[1] = 0
+            wt[1] = 0.0
+            return 2
+        if s < 0.5:  # between the wall node and centre 0
+            t = 2.0 * s
+            if periodic:
+                idx[0] = 0
+                wt[0] = t + 0.5 * (1.0 - t)
+                idx[1] = n - 1
+                wt[1] = 0.5 * (1.0 - t)
+            else:
+                idx[0] = 0
+                wt[0] = 1.0
+                idx[1] = 0
+                wt[1] = 0.0
+            return 2
+        if s > n - 0.5:  # between centre n − 1 and the wall node
+            t = 2.0 * (s - (n - 0.5))
+            if periodic:
+                idx[0] = n - 1
+                wt[0] = (1.0 - t) + 0.5 * t
+                idx[1] = 0
+                wt[1] = 0.5 * t
+            else:
+                idx[0] = n - 1
+                wt[0] = 1.0
+                idx[1] = n - 1
+                wt[1] = 0.0
+            return 2
+        k = int(math.floor(s - 0.5))
+        if k > n - 2:
+            k = n - 2
+        t = s - 0.5 - k
+        idx[0] = k
+        wt[0] = 1.0 - t
+        idx[1] = k + 1
+        wt[1] = t
+        return 2
+    k = int(math.floor(s))
+    if k > n - 1:
+        k = n - 1
+    t = s - k
+    idx[0] = k
+    wt[0] = 1.0 - t
+    idx[1] = k + 1
+    if periodic and k + 1 == n:
+        idx[1] = 0
+    wt[1] = t
+    return 2
+
+
+@njit(cache=True, inline="always")
+def _mean(f, ia, wa, ib, wb):
+    """Σ_a Σ_b wa[a] wb[b] f[ia[a], ib[b]] over the two nodes of each axis."""
+    return (wa[0] * (wb[0] * f[ia[0], ib[0]] + wb[1] * f[ia[0], ib[1]])
+            + wa[1] * (wb[0] * f[ia[1], ib[0]] + wb[1] * f[ia[1], ib[1]]))
+
+
+@njit(cache=True, inline="always")
+def _face_gradient(p, i, j, n, inv_d, periodic, axis):
+    """∂p/∂x (axis 0) on x-face (i, j) or ∂p/∂y (axis 1) on y-face (j, i) [Pa/m]: the centred
+    difference of the two cells; across a periodic side the wrapped cells; a wall face copies
+    its nearest interior face (``interpolation.pressure_gradient(boundary="copy")``)."""
+    if n < 2:
+        return 0.0
+    if i == 0 or i == n:
+        if periodic:
+            a, b = n - 1, 0
+        elif i == 0:
+            a, b = 0, 1
+        else:
+            a, b = n - 2, n - 1
+    else:
+        a, b = i - 1, i
+    if axis == 0:
+        return (p[b, j] - p[a, j]) * inv_d
+    return (p[j, b] - p[j, a]) * inv_d
+
+
+@njit(cache=True, error_model="numpy")
+def deposit(code, position, velocity, radius, volume, u, v, voidage, rho, mu, dx, dy, min_voidage, px, py, kp,
+            AU, BU, AV, BV):
+    """K_p and the face sums of the ``particle`` mode (module docstring); returns the number of
+    particles whose drag arguments are out of range (their K_p is NaN, nothing deposited).
+
+    position, velocity : (N, 3); radius, volume, kp : (N,); u, AU, BU : (nx + 1, ny);
+    v, AV, BV : (nx, ny + 1); voidage (ε at the end of the gas step, clipped to
+    [min_voidage, 1] at the particle), rho : (nx, ny). A*, B* are overwritten.
+    """
+    nx, ny = voidage.shape
+    idx, idy = 1.0 / dx, 1.0 / dy
+    AU[:, :] = 0.0
+    BU[:, :] = 0.0
+    AV[:, :] = 0.0
+    BV[:, :] = 0.0
+    ci = np.empty(2, np.int64)
+    cw = np.empty(2)
+    fi = np.empty(2, np.int64)
+    fw = np.empty(2)
+    cj = np.empty(2, np.int64)
+    cv = np.empty(2)
+    fj = np.empty(2, np.int64)
+    fv = np.empty(2)
+    three = velocity.shape[1] > 2
+    bad = 0
+    for q in range(position.shape[0]):
+        _axis(position[q, 0], idx, nx, True, px, ci, cw)
+        _axis(position[q, 0], idx, nx, False, px, fi, fw)
+        _axis(position[q, 1], idy, ny, True, py, cj, cv)
+        _axis(position[q, 1], idy, ny, False, py, fj, fv)
+        eps = _mean(voidage, ci, cw, cj, cv)
+        rg = _mean(rho, ci, cw, cj, cv)
+        if eps < min_voidage:
+            eps = min_voidage
+        elif eps > 1.0:
+            eps = 1.0
+        vx = velocity[q, 0]
+        vy = velocity[q, 1]
+        wx = _mean(u, fi, fw, cj, cv) - vx
+        wy = _mean(v, ci, cw, fj, fv) - vy
+        wz = -velocity[q, 2] if three else 0.0
+        slip = math.sqrt(wx * wx + wy * wy + wz * wz)
+        d = 2.0 * radius[q]
+        if not _drag_arguments_valid(eps, slip, d, rg, mu):
+            bad += 1
+            kp[q] = math.nan
+            continue
+        k = beta_per_solids(code, eps, slip, d, rg, mu, 1.0) * volume[q]  # β V_p/(1 − ε), Sun eq. 29
+        kp[q] = k
+        for a in range(2):
+            for b in range(2):
+                w = fw[a] * cv[b] * k
+                AU[fi[a], cj[b]] += w
+                BU[fi[a], cj[b]] += w * vx
+                w = cw[a] * fv[b] * k
+                AV[ci[a], fj[b]] += w
+                BV[ci[a], fj[b]] += w * vy
+    return bad
+
+
+@njit(cache=True, error_model="numpy")
+def particle_forces(position, velocity, volume, kp, u, v, p, dx, dy, px, py, pressure_force, dim2, out, total):
+    """out[q] = K_q (u_q − v_q) − V_q ∇p_q [N] (Sun 2007 eqs 28-29) with the weights of ``deposit``.
+
+    ∇p at the particle: the face gradients (``_face_gradient``) interpolated like the velocity on
+    their face. ``total`` (N, 3) follows the change of ``out`` (see ``_exchange_kernels.gas_forces``)
+    or is (0, 3). z component 0 if ``dim2``; in 3D the gas has no z velocity, so F_z = −K v_z.
+    """
+    nx, ny = p.shape
+    idx, idy = 1.0 / dx, 1.0 / dy
+    ci = np.empty(2, np.int64)
+    cw = np.empty(2)
+    fi = np.empty(2, np.int64)
+    fw = np.empty(2)
+    cj = np.empty(2, np.int64)
+    cv = np.empty(2)
+    fj = np.empty(2, np.int64)
+    fv = np.empty(2)
+    three = velocity.shape[1] > 2
+    follow = total.shape[0] > 0
+    for q in range(position.shape[0]):
+        _axis(position[q, 0], idx, nx, True, px, ci, cw)
+        _axis(position[q, 0], idx, nx, False, px, fi, fw)
+        _axis(position[q, 1], idy, ny, True, py, cj, cv)
+        _axis(position[q, 1], idy, ny, False, py, fj, fv)
+        k = kp[q]
+        fx = k * (_mean(u, fi, fw, cj, cv) - velocity[q, 0])
+        fy = k * (_mean(v, ci, cw, fj, fv) - velocity[q, 1])
+        fz = -k * velocity[q, 2] if three else 0.0
+        if pressure_force:
+            gx = 0.0
+            gy = 0.0
+            for a in range(2):
+                for b in range(2):
+                    gx += fw[a] * cv[b] * _face_gradient(p, fi[a], cj[b], nx, idx, px, 0)
+                    gy += cw[a] * fv[b] * _face_gradient(p, fj[b], ci[a], ny, idy, py, 1)
+            fx -= volume[q] * gx  # −V_p ∇p, Sun eq. 28
+            fy -= volume[q] * gy
+        if dim2:
+            fz = 0.0
+        if follow:
+            total[q, 0] += fx - out[q, 0]
+            total[q, 1] += fy - out[q, 1]
+            total[q, 2] += fz - out[q, 2]
+        out[q, 0] = fx
+        out[q, 1] = fy
+        out[q, 2] = fz
+
+
+@njit(cache=True, error_model="numpy")
+def cell_faces(beta, solids_u, solids_v, px, py, bu, su, bv, sv):
+    """Face β (bu, bv) and solids velocity (su, sv) of the ``cell`` mode from the cell β and u_s:
+    β_f = (β_a + β_b)/2 and u_s,f = (β_a u_s,a + β_b u_s,b)/(β_a + β_b) (0 where β_f = 0), a ghost
+    cell counting β = 0 and a periodic side joining its two edge cells (face n = face 0)."""
+    nx, ny = beta.shape
+    for j in range(ny):
+        for i in range(nx + 1):
+            ba = 0.0
+            ma = 0.0
+            bb = 0.0
+            mb = 0.0
+            a = i - 1
+            b = i
+            if px and (i == 0 or i == nx):
+                a = nx - 1
+                b = 0
+            if a >= 0:
+                ba = beta[a, j]
+                ma = ba * solids_u[a, j]
+            if b < nx:
+                bb = beta[b, j]
+                mb = bb * solids_u[b, j]
+            bu[i, j] = 0.5 * (ba + bb)
+            su[i, j] = (ma + mb) / (ba + bb) if ba + bb > 0.0 else 0.0
+    for i in range(nx):
+        for j in range(ny + 1):
+            ba = 0.0
+            ma = 0.0
+            bb = 0.0
+            mb = 0.0
+            a = j - 1
+            b = j
+            if py and (j == 0 or j == ny):
+                a = ny - 1
+                b = 0
+            if a >= 0:
+                ba = beta[i, a]
+                ma = ba * solids_v[i, a]
+            if b < ny:
+                bb = beta[i, b]
+                mb = bb * solids_v[i, b]
+            bv[i, j] = 0.5 * (ba + bb)
+            sv[i, j] = (ma + mb) / (ba + bb) if ba + bb > 0.0 else 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def cell_forces(position, velocity, volume, beta, solids_u, solids_v, u, v, p, dx, dy, cell_volume, px, py,
+                pressure_force, dim2, out, total):
+    """out[q] = (V_q / Σ_{r in c} V_r) β_c V_c (u_c − u_s,c) − V_q ∇p_q [N] for the cell c of q's centre
+    (Sun 2007's cell-averaged drag shared in the cell; u_c the mean of the cell's two faces),
+    ∇p_q as in ``particle_forces``. ``total`` as there."""
+    nx, ny = beta.shape
+    solids = np.zeros((nx, ny))
+    n = position.shape[0]
+    cell = np.empty((n, 2), np.int64)
+    for q in range(n):
+        i = _cell(position[q, 0], dx, nx)
+        j = _cell(position[q, 1], dy, ny)
+        cell[q, 0] = i
+        cell[q, 1] = j
+        solids[i, j] += volume[q]
+    idx, idy = 1.0 / dx, 1.0 / dy
+    ci = np.empty(2, np.int64)
+    cw = np.empty(2)
+    fi = np.empty(2, np.int64)
+    fw = np.empty(2)
+    cj = np.empty(2, np.int64)
+    cv = np.empty(2)
+    fj = np.empty(2, np.int64)
+    fv = np.empty(2)
+    follow = total.shape[0] > 0
+    for q in range(n):
+        i = cell[q, 0]
+        j = cell[q, 1]
+        share = volume[q] / solids[i, j] * beta[i, j] * cell_volume
+        fx = share * (0.5 * (u[i, j] + u[i + 1, j]) - solids_u[i, j])
+        fy = share * (0.5 * (v[i, j] + v[i, j + 1]) - solids_v[i, j])
+        fz = 0.0
+        if pressure_force:
+            _axis(position[q, 0], idx, nx, True, px, ci, cw)
+            _axis(position[q, 0], idx, nx, False, px, fi, fw)
+            _axis(position[q, 1], idy, ny, True, py, cj, cv)
+            _axis(position[q, 1], idy, ny, False, py, fj, fv)
+            gx = 0.0
+            gy = 0.0
+            for a in range(2):
+                for b in range(2):
+                    gx += fw[a] * cv[b] * _face_gradient(p, fi[a], cj[b], nx, idx, px, 0)
+                    gy += cw[a] * fv[b] * _face_gradient(p, fj[b], ci[a], ny, idy, py, 1)
+            fx -= volume[q] * gx
+            fy -= volume[q] * gy
+        if follow:
+            total[q, 0] += fx - out[q, 0]
+            total[q, 1] += fy - out[q, 1]
+            total[q, 2] += fz - out[q, 2]
+        out[q, 0] = fx
+        out[q, 1] = fy
+        out[q, 2] = fz

@@ -11,7 +11,8 @@ simulation's objects (instance attributes; nothing global is patched):
     DEM             engine.advance
     gas solve       gas.solver.advance
     map             gas._map            (particles → voidage, solids velocity)
-    beta            gas.cell_beta       (Sun 2007 eq. 33)
+    beta            gas.cell_beta       (Sun 2007 eq. 33; "cell" and "cell_beta" exchanges)
+    deposit         gas._deposit        (K_p and face sums of the "particle" exchange)
     interp+drag     gas.set_particle_forces (Hoomans 1996 eqs 40-41 interpolation, drag, −V_p ∇p,
                     and the swap into the engine's external and total forces)
     other           the rest of run(): the step loop, chunking, checks
@@ -28,7 +29,7 @@ from collections import defaultdict
 import fluidem as fd
 
 COMPONENTS = (("DEM", "engine", "advance"), ("gas solve", "solver", "advance"), ("map", "gas", "_map"),
-              ("beta", "gas", "cell_beta"), ("interp+drag", "gas", "set_particle_forces"))
+              ("beta", "gas", "cell_beta"), ("deposit", "gas", "_deposit"), ("interp+drag", "gas", "set_particle_forces"))
 
 
 def _parse_sets(items):

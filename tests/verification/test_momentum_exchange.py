@@ -132,3 +132,33 @@ def test_closed_periodic_box_with_unpaired_exchange_loses_momentum(tmp_path):
     sim.step_once(40 * sim.gas.substeps)
     g, p = x_momentum(sim)
     assert abs(g + p - p0) / scale > 1e-6
+
+
+def test_paired_interpolation_reproduces_linear_fields_and_wraps_periodic_sides():
+    """The weights of the paired kernels are Hoomans' eq. 41: exact for linear fields inside the
+    node range; across a periodic side a centre field is interpolated between the two edge cells."""
+    from fluidem.coupling import _paired_kernels as P
+
+    nx, ny, dx, dy = 5, 4, 0.01, 0.02
+    rng = np.random.default_rng(2)
+    n = 200
+    # inside the node ranges of both fields: x in [dx/2, (nx − 1/2) dx], y in [dy/2, (ny − 1/2) dy]
+    pos = np.column_stack([rng.uniform(0.5 * dx, (nx - 0.5) * dx, n), rng.uniform(0.5 * dy, (ny - 0.5) * dy, n),
+                           np.zeros(n)])
+    xf, yc = np.arange(nx + 1) * dx, (np.arange(ny) + 0.5) * dy
+    xc, yf = (np.arange(nx) + 0.5) * dx, np.arange(ny + 1) * dy
+    u = 1.0 + 3.0 * xf[:, None] - 2.0 * yc[None, :]
+    v = -0.5 + 4.0 * xc[:, None] + 7.0 * yf[None, :]
+    out = np.zeros((n, 3))
+    P.particle_forces(pos, np.zeros((n, 3)), np.zeros(n), np.ones(n), u, v, np.zeros((nx, ny)), dx, dy, False, False,
+                      False, True, out, np.empty((0, 3)))
+    np.testing.assert_allclose(out[:, 0], 1.0 + 3.0 * pos[:, 0] - 2.0 * pos[:, 1], rtol=1e-13)
+    np.testing.assert_allclose(out[:, 1], -0.5 + 4.0 * pos[:, 0] + 7.0 * pos[:, 1], rtol=1e-13)
+    # periodic in x: on the side x = 0 the y-face field is the mean of columns 0 and nx − 1
+    edge = np.array([[0.0, 1.5 * dy, 0.0], [0.25 * dx, 1.5 * dy, 0.0]])
+    out = np.zeros((2, 3))
+    P.particle_forces(edge, np.zeros((2, 3)), np.zeros(2), np.ones(2), u, v, np.zeros((nx, ny)), dx, dy, True, False,
+                      False, True, out, np.empty((0, 3)))
+    vy = v[:, 1] + 0.5 * (v[:, 2] - v[:, 1])  # y = 1.5 dy lies halfway between faces 1 and 2
+    assert out[0, 1] == pytest.approx(0.5 * (vy[0] + vy[-1]), rel=1e-13)
+    assert out[1, 1] == pytest.approx(0.75 * vy[0] + 0.25 * vy[-1], rel=1e-13)

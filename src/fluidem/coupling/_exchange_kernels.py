@@ -41,6 +41,19 @@ def _drag_arguments_valid(eps, slip, d, rho, mu):
     return eps > 0.0 and eps <= 1.0 and not slip < 0.0 and not d <= 0.0 and not rho <= 0.0 and not mu <= 0.0
 
 
+@njit(cache=True, inline="always")
+def store_force(out, total, q, fx, fy, fz, follow):
+    """out[q] = (fx, fy, fz); if ``follow``, total[q] += the change first (the engine's stored
+    total force follows its external force)."""
+    if follow:
+        total[q, 0] += fx - out[q, 0]
+        total[q, 1] += fy - out[q, 1]
+        total[q, 2] += fz - out[q, 2]
+    out[q, 0] = fx
+    out[q, 1] = fy
+    out[q, 2] = fz
+
+
 @njit(cache=True, error_model="numpy")
 def cell_beta(code, position, radius, volume, u, v, rho, voidage, solids_u, solids_v, mu, dx, dy, cell_volume,
               out):
@@ -173,11 +186,5 @@ def gas_forces(code, position, velocity, radius, volume, u, v, voidage, rho, p, 
             fx = math.nan
             fy = math.nan
             fz = math.nan
-        if follow:
-            total[q, 0] += fx - out[q, 0]
-            total[q, 1] += fy - out[q, 1]
-            total[q, 2] += fz - out[q, 2]
-        out[q, 0] = fx
-        out[q, 1] = fy
-        out[q, 2] = fz
+        store_force(out, total, q, fx, fy, fz, follow)
     return bad

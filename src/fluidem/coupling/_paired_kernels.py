@@ -32,7 +32,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ._exchange_kernels import _cell, _drag_arguments_valid
+from ._exchange_kernels import _cell, _drag_arguments_valid, store_force
 from .drag._dispatch import beta_per_solids
 
 
@@ -231,13 +231,25 @@ def particle_forces(position, velocity, volume, kp, u, v, p, dx, dy, px, py, pre
             fy -= volume[q] * gy
         if dim2:
             fz = 0.0
-        if follow:
-            total[q, 0] += fx - out[q, 0]
-            total[q, 1] += fy - out[q, 1]
-            total[q, 2] += fz - out[q, 2]
-        out[q, 0] = fx
-        out[q, 1] = fy
-        out[q, 2] = fz
+        store_force(out, total, q, fx, fy, fz, follow)
+
+
+@njit(cache=True, inline="always")
+def _faces_of_axis(beta, solids, periodic, bf, sf):
+    """``cell_faces`` along axis 0 of beta (nx, ny) → faces (nx + 1, ny); the y-faces are this on
+    the transposed arrays."""
+    n, m = beta.shape
+    for j in range(m):
+        for i in range(n + 1):
+            a, b = i - 1, i
+            if periodic and (i == 0 or i == n):
+                a, b = n - 1, 0
+            ba = beta[a, j] if a >= 0 else 0.0
+            bb = beta[b, j] if b < n else 0.0
+            ma = ba * solids[a, j] if a >= 0 else 0.0
+            mb = bb * solids[b, j] if b < n else 0.0
+            bf[i, j] = 0.5 * (ba + bb)
+            sf[i, j] = (ma + mb) / (ba + bb) if ba + bb > 0.0 else 0.0
 
 
 @njit(cache=True, error_model="numpy")
@@ -245,45 +257,8 @@ def cell_faces(beta, solids_u, solids_v, px, py, bu, su, bv, sv):
     """Face β (bu, bv) and solids velocity (su, sv) of the ``cell`` mode from the cell β and u_s:
     β_f = (β_a + β_b)/2 and u_s,f = (β_a u_s,a + β_b u_s,b)/(β_a + β_b) (0 where β_f = 0), a ghost
     cell counting β = 0 and a periodic side joining its two edge cells (face n = face 0)."""
-    nx, ny = beta.shape
-    for j in range(ny):
-        for i in range(nx + 1):
-            ba = 0.0
-            ma = 0.0
-            bb = 0.0
-            mb = 0.0
-            a = i - 1
-            b = i
-            if px and (i == 0 or i == nx):
-                a = nx - 1
-                b = 0
-            if a >= 0:
-                ba = beta[a, j]
-                ma = ba * solids_u[a, j]
-            if b < nx:
-                bb = beta[b, j]
-                mb = bb * solids_u[b, j]
-            bu[i, j] = 0.5 * (ba + bb)
-            su[i, j] = (ma + mb) / (ba + bb) if ba + bb > 0.0 else 0.0
-    for i in range(nx):
-        for j in range(ny + 1):
-            ba = 0.0
-            ma = 0.0
-            bb = 0.0
-            mb = 0.0
-            a = j - 1
-            b = j
-            if py and (j == 0 or j == ny):
-                a = ny - 1
-                b = 0
-            if a >= 0:
-                ba = beta[i, a]
-                ma = ba * solids_v[i, a]
-            if b < ny:
-                bb = beta[i, b]
-                mb = bb * solids_v[i, b]
-            bv[i, j] = 0.5 * (ba + bb)
-            sv[i, j] = (ma + mb) / (ba + bb) if ba + bb > 0.0 else 0.0
+    _faces_of_axis(beta, solids_u, px, bu, su)
+    _faces_of_axis(beta.T, solids_v.T, py, bv.T, sv.T)
 
 
 @njit(cache=True, error_model="numpy")
@@ -322,10 +297,4 @@ def cell_forces(position, velocity, volume, beta, solids_u, solids_v, u, v, p, d
                                   nx, ny, idx, idy, px, py)
             fx -= volume[q] * gx
             fy -= volume[q] * gy
-        if follow:
-            total[q, 0] += fx - out[q, 0]
-            total[q, 1] += fy - out[q, 1]
-            total[q, 2] += fz - out[q, 2]
-        out[q, 0] = fx
-        out[q, 1] = fy
-        out[q, 2] = fz
+        store_force(out, total, q, fx, fy, fz, follow)

@@ -2,6 +2,7 @@
 
     python benchmarks/gas_step.py                       # 15x25, 15x45 (tsuji-jet), 39x60, 150x300
     python benchmarks/gas_step.py --grids 15x45 --repeat 5 --seconds 2
+    python benchmarks/gas_step.py --grids 39x60,150x300 --linear-solver multigrid,pyamg   # one row per solver
     PYTHONPATH=/path/to/other/src python benchmarks/gas_step.py    # another checkout, for before/after
 
 Problems:
@@ -13,6 +14,10 @@ Problems:
   0.15 m x 0.9 m, 39 m/s jet, ideal gas, DT = 1e-4 s) with a bubbling-bed voidage (bed to 0.22 m,
   a surface wave and a rising bubble) and Gidaspow's beta from the gas every step, with a solids
   velocity field, as the coupling hands them over.
+
+``--linear-solver``: the ``GasSolver`` option ("auto", the default choice, or "band", "multigrid",
+"superlu", "pyamg"); a comma-separated list times each in turn on the same problem. pyamg's
+Krylov loop uses NumPy's BLAS: on a small shared machine run it with OPENBLAS_NUM_THREADS=1.
 
 Each row: the first 20 steps are not timed; then ``advance`` alone is timed for ``--seconds``;
 repeated ``--repeat`` times on a fresh solver; the median is reported (the machine is shared).
@@ -28,10 +33,11 @@ import time
 import numpy as np
 
 
-def tsuji_problem():
+def tsuji_problem(linear_solver="auto"):
     from fluidem.case import load_case
 
     case = load_case("tsuji-jet")
+    case.gas.linear_solver = linear_solver
     solver = case.gas.build(case.gravity)
     grid = solver.grid
     X, Y = grid.centres()
@@ -65,10 +71,10 @@ def tsuji_problem():
     return solver, state, step_args, 1e-4
 
 
-def bench_problem(nx, ny):
+def bench_problem(nx, ny, linear_solver="auto"):
     from fluidem.gas.solver import _bench_problem
 
-    solver, state, beta_of, voidage_at = _bench_problem(nx, ny)
+    solver, state, beta_of, voidage_at = _bench_problem(nx, ny, linear_solver=linear_solver)
     dt = min(1e-4, 0.5 * min(solver.grid.dx, solver.grid.dy) / 45.0)
 
     def step_args(st, t, dt):
@@ -77,9 +83,10 @@ def bench_problem(nx, ny):
     return solver, state, step_args, dt
 
 
-def time_one(name, seconds):
+def time_one(name, seconds, linear_solver="auto"):
     nx, ny = (int(k) for k in name.split("x"))
-    solver, state, step_args, dt = tsuji_problem() if (nx, ny) == (15, 45) else bench_problem(nx, ny)
+    solver, state, step_args, dt = (tsuji_problem(linear_solver) if (nx, ny) == (15, 45)
+                                    else bench_problem(nx, ny, linear_solver))
     t = 0.0
     for _ in range(20):
         solver.advance(state, dt, t, **step_args(state, t, dt))
@@ -106,6 +113,9 @@ def main(argv=None):
     ap.add_argument("--grids", default="15x25,15x45,39x60,150x300")
     ap.add_argument("--seconds", type=float, default=2.0)
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--linear-solver", default="auto",
+                    help="GasSolver linear_solver: auto, band, multigrid, superlu, pyamg; a comma-separated list "
+                         "times each (e.g. multigrid,pyamg)")
     args = ap.parse_args(argv)
     import fluidem
 
@@ -113,13 +123,14 @@ def main(argv=None):
     print(f"{'grid':>8} {'solver':>9} {'wall ms/step':>12} {'(min':>8} {'max)':>8} {'cpu ms/step':>11} "
           f"{'it/step':>8} {'fact/step':>9} {'steps':>7}")
     for name in args.grids.split(","):
-        runs = [time_one(name, args.seconds) for _ in range(args.repeat)]
-        ms = [r["ms"] for r in runs]
-        r = runs[0]
-        label = name + ("*" if name == "15x45" else "")
-        print(f"{label:>8} {r['solver']:>9} {statistics.median(ms):12.4f} {min(ms):8.4f} {max(ms):8.4f} "
-              f"{statistics.median(x['cpu'] for x in runs):11.4f} {statistics.median(x['it'] for x in runs):8.2f} "
-              f"{statistics.median(x['lu'] for x in runs):9.3f} {sum(x['steps'] for x in runs):7d}", flush=True)
+        for linear_solver in args.linear_solver.split(","):
+            runs = [time_one(name, args.seconds, linear_solver) for _ in range(args.repeat)]
+            ms = [r["ms"] for r in runs]
+            r = runs[0]
+            label = name + ("*" if name == "15x45" else "")
+            print(f"{label:>8} {r['solver']:>9} {statistics.median(ms):12.4f} {min(ms):8.4f} {max(ms):8.4f} "
+                  f"{statistics.median(x['cpu'] for x in runs):11.4f} {statistics.median(x['it'] for x in runs):8.2f} "
+                  f"{statistics.median(x['lu'] for x in runs):9.3f} {sum(x['steps'] for x in runs):7d}", flush=True)
     print("* tsuji-jet (built-in case), bubbling-bed voidage and beta; medians over --repeat runs")
 
 

@@ -9,7 +9,9 @@ dense bed   The peer benchmark of shared/PEERS.md: monodisperse spheres d = 4 mm
             this engine (lattice → settle → quench) and cached.
 pour        The built-in 2D ``pour`` case (500 particles), stepping from its start.
 gas step    One gas-phase step on the 15 × 25, 39 × 60 and 150 × 300 grids
-            (``fluidem.gas.gas_step_benchmark``: Hoomans 1996 orifice bed).
+            (``fluidem.gas.gas_step_benchmark``: Hoomans 1996 orifice bed), with the
+            pressure-correction solver ``gas_linear_solver`` ("auto", or e.g. "pyamg"; for
+            solvers side by side see ``benchmarks/gas_step.py --linear-solver multigrid,pyamg``).
 
 Only the stepping loop is timed. Results are particle-steps per second.
 """
@@ -153,7 +155,7 @@ def time_engine(eng, steps: int, target_seconds: float = 5.0) -> tuple[int, floa
 
 
 def run_bench(sizes="10000,100000", threads="1,2", steps: int = 0, as_json: str | None = None,
-              gas: bool = True) -> list[dict]:
+              gas: bool = True, gas_linear_solver: str = "auto") -> list[dict]:
     import numba
 
     from .analysis.probes import contacts
@@ -184,11 +186,11 @@ def run_bench(sizes="10000,100000", threads="1,2", steps: int = 0, as_json: str 
     if gas:
         from .gas import gas_step_benchmark
 
-        print(f"\n{'gas step':42s} {'grid':>8s} {'dt s':>8s} {'ms/step':>8s} {'iterations':>10s}")
-        for r in gas_step_benchmark():
+        print(f"\n{'gas step':42s} {'grid':>8s} {'dt s':>8s} {'solver':>9s} {'ms/step':>8s} {'iterations':>10s}")
+        for r in gas_step_benchmark(linear_solver=gas_linear_solver):
             rows.append(r)
-            print(f"{r['problem']:42s} {r['grid']:>8s} {r['dt_s']:8.1e} {r['ms_per_step']:8.3f} "
-                  f"{r['iterations_per_step']:10.2f}", flush=True)
+            print(f"{r['problem']:42s} {r['grid']:>8s} {r['dt_s']:8.1e} {r['linear_solver']:>9s} "
+                  f"{r['ms_per_step']:8.3f} {r['iterations_per_step']:10.2f}", flush=True)
     if as_json:
         Path(as_json).write_text(json.dumps(rows, indent=2) + "\n")
     return rows

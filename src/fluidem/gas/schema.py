@@ -9,6 +9,7 @@ Example (TOML)::
 
     [gas]
     dt = 1e-4                      # gas time step DT [s]; the DEM dt divides it
+    linear_solver = "auto"         # pressure correction: auto, band, multigrid, superlu, pyamg
     [gas.grid]
     cells = [15, 25]
     size = [0.15, 0.5]             # [m], lower-left corner at the origin
@@ -21,6 +22,12 @@ Example (TOML)::
     kind = "inflow"
     voidage = 0.4
     segments = [{superficial = 1.8}, {interstitial = 45.0, start = 0.07, end = 0.08}]
+
+``linear_solver`` picks the solution of the pressure-correction equations (``GasSolver``):
+"auto" (compiled band LU up to 64 cells across, compiled GMRES + grid multigrid beyond),
+"band", "multigrid", "superlu" (SciPy), or "pyamg": flexible GMRES preconditioned by the
+algebraic multigrid of the pyamg package (classical Ruge-Stüben, hierarchy reused while the
+matrix changes little), each correction solved to the residual of "multigrid".
 
 A velocity may change in time: ``{pulse = 2.5, start = 0.0, duration = 0.2, otherwise = 0.5}``
 (Hoomans 1996 §5.4) or ``{table = [[0.0, 0.0], [2.0, 0.4]]}`` (linear between (t, value) points).
@@ -168,6 +175,22 @@ class GasSection(_Strict):
     initial_velocity: tuple[float, float] = Field((0.0, 0.0), description="interstitial gas velocity at t = 0 [m/s]")
     convection: Literal["upwind", "tvd"] = "upwind"
     tolerance: float = Field(1e-10, gt=0.0, lt=1.0, description="mass-residual tolerance of each gas step [-]")
+    linear_solver: Literal["auto", "band", "multigrid", "superlu", "pyamg"] = Field(
+        "auto", description="pressure-correction solver: 'auto' (band LU up to 64 cells across, compiled "
+        "GMRES + grid multigrid beyond), 'band', 'multigrid', 'superlu' (SciPy), or 'pyamg' (FGMRES "
+        "preconditioned by pyamg's algebraic multigrid, same residual target as 'multigrid'; needs pyamg)")
+
+    @field_validator("linear_solver")
+    @classmethod
+    def _pyamg_installed(cls, v):
+        if v == "pyamg":
+            from .solver import _import_pyamg
+
+            try:
+                _import_pyamg()
+            except CaseError as err:  # without its "gas.linear_solver = 'pyamg': ", which the case error adds
+                raise ValueError(str(err).split(": ", 1)[-1]) from None
+        return v
 
     @field_validator("boundaries")
     @classmethod
@@ -188,4 +211,5 @@ class GasSection(_Strict):
         """The ``GasSolver`` of this section under ``gravity`` (gx, gy[, 0]) [m/s^2]."""
         return GasSolver(self.grid.build(), self.properties.build(),
                          {side: b.build() for side, b in self.boundaries.items()},
-                         gravity=tuple(gravity)[:2], convection=self.convection, tolerance=self.tolerance)
+                         gravity=tuple(gravity)[:2], convection=self.convection, tolerance=self.tolerance,
+                         linear_solver=self.linear_solver)

@@ -30,9 +30,11 @@ The corrections are solved (``linear_solver``) by a compiled block-tridiagonal L
 up to 64 cells across (factors reused from step to step while the matrix changes little,
 and after a change factorised again only from the first changed line of cells, counted from
 the pressure outlet), by GMRES with an aggregation-multigrid preconditioner beyond (cost
-about proportional to the number of cells), or by SciPy's SuperLU. One step is three
-compiled calls (``start_step``, ``iterate``, ``end_step``); the rest of ``advance`` checks
-and classifies its inputs.
+about proportional to the number of cells), by SciPy's SuperLU, or (``"pyamg"``, on request)
+by flexible GMRES preconditioned by an algebraic multigrid hierarchy of the pyamg library. One
+step is three compiled calls (``start_step``, ``iterate``, ``end_step``); the rest of
+``advance`` checks and classifies its inputs (with "pyamg" the iterations are a Python loop
+over the compiled pieces of ``iterate``, the linear solves in pyamg).
 
 Inside the solver the pressure is kept relative to ``reference_pressure``, so that
 gradients of a few Pa/m in 1e5 Pa keep their digits; ``GasState.p`` is absolute.
@@ -60,11 +62,24 @@ _F64 = np.dtype(np.float64)
 SCHEMES = {"upwind": UPWIND, "tvd": TVD}
 SLOW_CONVERGENCE = 0.3  # refactorise the pressure matrix when an iteration cuts the residual by less than this
 BAND_MAX = 64  # band LU (compiled) up to this half-width; multigrid-preconditioned GMRES beyond
-LINEAR_SOLVERS = ("auto", "band", "multigrid", "superlu")
+LINEAR_SOLVERS = ("auto", "band", "multigrid", "superlu", "pyamg")
+SOLVER_PYAMG = 3  # ipar[K.I_SOLVER] of the pyamg path (Python loop; the kernels never see it)
 KRYLOV_REDUCTION = 1e-4  # multigrid path: each correction solves the linear system to this fraction of its residual
 KRYLOV_RESTART = 30  # GMRES restart length
 KRYLOV_MAX = 300  # GMRES iterations of one correction before the multigrid path gives way to SuperLU
 COARSEST = 64  # cells of the coarsest multigrid level (dense LU) at most
+AMG_RATE = 0.1  # pyamg path: keep the hierarchy while FGMRES cuts the residual at least this much per iteration
+
+
+def _import_pyamg():
+    """The pyamg module, or the CaseError of ``linear_solver = "pyamg"`` without it."""
+    try:
+        import pyamg
+        import pyamg.krylov  # noqa: F401
+    except ImportError as err:
+        raise CaseError(f"gas.linear_solver = 'pyamg': the pyamg package is not installed ({err}); "
+                        "pip install pyamg, or use 'multigrid' or 'superlu'") from None
+    return pyamg
 
 
 def _show(value) -> str:
@@ -222,8 +237,9 @@ class GasSolver:
         slower but skip the factorisation. 0 refactorises whenever anything changed.
         The band factorises again only the blocks (lines of cells) from the first one
         whose rows changed by more than 0.3 times this fraction. Not used by multigrid,
-        which makes its hierarchy anew every iteration.
-    linear_solver : {"auto", "band", "multigrid", "superlu"}
+        which makes its hierarchy anew every iteration, nor by pyamg, which solves with the
+        current matrix and keeps its hierarchy (a preconditioner) while it works well.
+    linear_solver : {"auto", "band", "multigrid", "superlu", "pyamg"}
         Solution of the pressure-correction equations: "band", a compiled band LU without
         pivoting (the matrix is diagonally dominant; the unknowns are numbered along the
         shorter or the periodic direction first, so the half-width is min(nx, ny));
@@ -232,7 +248,14 @@ class GasSolver:
         at ``tolerance``), for large grids; "superlu", SciPy's SuperLU with its factors
         applied by compiled triangular solves. "auto": the band up to a half-width of 64
         cells unless both directions are periodic, multigrid beyond. Band and multigrid
-        give way to SuperLU if they fail (a poor pivot, a stalled GMRES).
+        give way to SuperLU if they fail (a poor pivot, a stalled GMRES). "pyamg" (needs
+        the pyamg package; not chosen by "auto", slower than "multigrid" on the benchmark
+        beds): pyamg's flexible GMRES on the current matrix, preconditioned by a classical
+        (Ruge-Stüben) algebraic multigrid V-cycle, each correction solved to the residual
+        of "multigrid"; the hierarchy is kept over iterations and steps until GMRES with it
+        slows down (see ``_iterate_pyamg``); a CaseError naming the key if pyamg is missing
+        or fails. Its vector operations go through NumPy's BLAS: on a few shared cores,
+        OPENBLAS_NUM_THREADS=1 made it about six times faster at 150 x 300.
 
     Examples
     --------
@@ -270,6 +293,7 @@ class GasSolver:
                             + ", ".join(repr(k) for k in LINEAR_SOLVERS))
         if linear_solver == "band" and all(boundaries[s].flag == PERIODIC for s in SIDES):
             raise CaseError("gas.linear_solver = 'band': not with periodic sides in both directions; use 'superlu'")
+        self._pyamg = _import_pyamg() if linear_solver == "pyamg" else None
         self._linear_solver = linear_solver
         self.grid, self.props = grid, props
         self.boundaries = dict(boundaries)
@@ -468,7 +492,8 @@ class GasSolver:
         choice = self._linear_solver
         if choice == "auto":
             choice = "band" if bw <= BAND_MAX and not both_periodic else "multigrid"
-        solver = {"band": K.SOLVER_BAND, "multigrid": K.SOLVER_MULTIGRID, "superlu": K.SOLVER_SUPERLU}[choice]
+        solver = {"band": K.SOLVER_BAND, "multigrid": K.SOLVER_MULTIGRID, "superlu": K.SOLVER_SUPERLU,
+                  "pyamg": SOLVER_PYAMG}[choice]
         if solver == K.SOLVER_MULTIGRID and not self._setup_multigrid():
             solver = K.SOLVER_SUPERLU
         if solver != K.SOLVER_MULTIGRID:
@@ -482,6 +507,8 @@ class GasSolver:
         self._csc_indptr = self._indptr.astype(np.int64)
         self._csc_block = self._order[self._csc_indices] // bw  # band: block of each matrix entry's row
         self._out = np.zeros(9)
+        if solver == SOLVER_PYAMG:
+            self._setup_pyamg()
         # step inputs: modes (K.IN_*), a 1 x 1 array per input for numbers, an empty array for none
         self._modes = np.zeros(6, np.int64)
         self._scalars = np.zeros((6, 1, 1))
@@ -491,6 +518,20 @@ class GasSolver:
         self._csc_ell = np.zeros(1, np.int64)
         self._mg = (np.zeros((3, 2), np.int64), np.zeros((1, 9), np.int64), np.zeros((1, 5)), np.zeros((4, 1)),
                     np.zeros((1, 1)), np.zeros(1, np.int64), np.zeros((2, 1)), np.zeros((4, 1)))
+
+    def _setup_pyamg(self):
+        """The pyamg path: the pressure matrix as CSR (its data gathered from the CSC data through
+        ``_amg_gather``), no hierarchy yet."""
+        n = self.grid.nx * self.grid.ny
+        nnz = self._indices.size
+        pattern = sp.csc_matrix((np.arange(nnz, dtype=float), self._indices, self._indptr), shape=(n, n)).tocsr()
+        pattern.sort_indices()
+        self._amg_gather = pattern.data.astype(np.int64)  # CSR entry k is CSC entry _amg_gather[k]
+        self._amg_A = sp.csr_matrix((np.zeros(nnz), pattern.indices.copy(), pattern.indptr.copy()), shape=(n, n))
+        self._amg_ml = None  # hierarchy (pyamg MultilevelSolver) of the matrix in self._lu_data
+        self._amg_M = None  # its V-cycle as a preconditioner
+        self._amg_rate0 = None  # residual reduction per FGMRES iteration of the first solve with it
+        self._amg_stale = False  # a later solve converged much slower: make it anew
 
     @staticmethod
     def _grid_neighbours(a, b, px, py):
@@ -770,12 +811,15 @@ class GasSolver:
             self._check_voidage(eps_new)
         if bad == K.BAD_BETA:
             raise CaseError("gas beta: must be finite and >= 0 [kg m^-3 s^-1] on every face")
-        while True:
-            status = K.iterate(*self._iterate_args)
-            if status == K.NEED_FACTORS:
-                self._factorise()
-                continue
-            break
+        if self._pyamg is not None:
+            status = self._iterate_pyamg()
+        else:
+            while True:
+                status = K.iterate(*self._iterate_args)
+                if status == K.NEED_FACTORS:
+                    self._factorise()
+                    continue
+                break
         o = out.tolist()
         rel = o[K.O_REL]
         if status == K.NOT_FINITE or rel > self._sqrt_tolerance:
@@ -807,6 +851,108 @@ class GasSolver:
         self._face_array(name, a, face_shape, centre_ok)  # raises the CaseError of a wrong shape
         raise AssertionError("unreachable")
 
+    def _iterate_pyamg(self) -> int:
+        """``K.iterate`` for the pyamg path: the same Newton iterations from the same compiled pieces
+        (residual, the current Jacobian, p += p'), with p' from pyamg's flexible GMRES on the current
+        matrix, preconditioned by an algebraic multigrid V-cycle, to the residual target of the
+        multigrid path, max(KRYLOV_REDUCTION ||R||, tolerance q_ref / (10 √n)). The hierarchy is only a
+        preconditioner: it is kept from iteration to iteration and step to step while FGMRES with it
+        reduces the residual per iteration by a factor of at most max(AMG_RATE, √(its factor when new)),
+        and made anew otherwise (or when KRYLOV_MAX iterations were not enough with an older one)."""
+        nx, ny = self.grid.nx, self.grid.ny
+        n = nx * ny
+        U, V, C, FU, FV, KU, KV = self.U, self.V, self.C, self.FU, self.FV, self.KU, self.KV
+        fpar, ipar, out = self._fpar, self._ipar, self._out
+        R, P = self.VEC[K.V_R], self.C[K.C_P]
+        data, A, gather = self._data, self._amg_A, self._amg_gather
+        it = 0
+        while True:
+            res, qref, fin, fout, acc, mass = K.predict_residual(U, V, C, FU, FV, KU, KV, self.row_of, R, fpar, ipar)
+            rel = res / qref if qref > 0.0 else 0.0
+            out[[K.O_RES, K.O_QREF, K.O_IN, K.O_OUT, K.O_ACC, K.O_MASS, K.O_REL]] = (res, qref, fin, fout, acc,
+                                                                                      mass, rel)
+            ipar[K.I_ITER] = it
+            status = (K.NOT_FINITE if not math.isfinite(rel) else K.CONVERGED if rel <= self.tolerance
+                      else K.MAX_ITERATIONS if it >= self.max_iterations else -1)
+            if status >= 0:
+                K.fill_face_ghosts(U, V, self.flags, nx, ny)
+                out[K.O_COURANT] = K.courant_number(U, V, fpar, ipar)
+                return status
+            K.assemble_pressure(data, self.diag_pos, self.upos, self.vpos, self.pin_pos, U, V, C, FU, FV, KU, KV,
+                                fpar, ipar)
+            np.take(data, gather, out=A.data)
+            b = -R
+            if self.pin_diag >= 0:
+                b[0] = 0.0
+            target = max(KRYLOV_REDUCTION * float(np.linalg.norm(b)), 0.1 * self.tolerance * qref / math.sqrt(n))
+            fresh = self._amg_ml is None or self._amg_stale
+            while True:
+                if fresh:
+                    self._amg_setup()
+                dp, its = self._amg_solve(b, target)
+                ipar[K.I_KRYLOV] += its
+                if dp is not None:
+                    break
+                if fresh:
+                    raise CaseError(
+                        f"gas.linear_solver = 'pyamg': GMRES with the pyamg multigrid preconditioner did not reduce "
+                        f"the pressure-correction residual to {target:.3g} in {KRYLOV_MAX} iterations; use "
+                        "'multigrid' or 'superlu'")
+                fresh = True  # an older hierarchy: make it anew and try again
+            P[1:-1, 1:-1] += dp.reshape(nx, ny)
+            K.fill_centre_ghosts(P, self.flags, self.RULES[K.RULE_P], C[K.C_PFIX], nx, ny)
+            K.update_density(C, fpar[K.F_COMP], fpar[K.F_RHOC], fpar[K.F_PREF])
+            it += 1
+
+    def _amg_setup(self) -> None:
+        """A pyamg hierarchy (classical Ruge-Stüben AMG, symmetric Gauss-Seidel smoothing) of the current
+        pressure matrix; a CaseError if pyamg cannot make one."""
+        try:
+            self._amg_ml = self._pyamg.ruge_stuben_solver(self._amg_A.copy(), max_coarse=COARSEST)
+            self._amg_M = self._amg_ml.aspreconditioner(cycle="V")
+        except Exception as err:  # noqa: BLE001 - any failure of the library is the case's to fix
+            self._amg_ml = None
+            raise CaseError(f"gas.linear_solver = 'pyamg': the pyamg multigrid setup failed "
+                            f"({type(err).__name__}: {err}); use 'multigrid' or 'superlu'") from err
+        self._amg_rate0 = None
+        self._amg_stale = False
+        self._lu_data[:] = self._data
+        self._ipar[K.I_HAVE_LU] = 1
+        self._ipar[K.I_NFACT] += 1
+
+    def _amg_solve(self, b: np.ndarray, target: float):
+        """(p', iterations) with ||b - A p'||_2 <= target by pyamg's flexible GMRES (right-preconditioned,
+        its test is on the true residual; checked here and continued if its estimate was short), or
+        (None, iterations) if KRYLOV_MAX iterations were not enough. Marks the hierarchy stale when the
+        residual fell by less than AMG_RATE or the square root of its first rate per iteration."""
+        A = self._amg_A
+        bn = float(np.linalg.norm(b))
+        x = np.zeros_like(b)
+        if bn <= target:
+            return x, 0
+        its, rn = 0, bn
+        while rn > target:
+            if its >= KRYLOV_MAX:
+                return None, its
+            residuals = []
+            try:
+                x, _ = self._pyamg.krylov.fgmres(A, b, x0=x, tol=target / bn, restart=KRYLOV_RESTART,
+                                                 maxiter=max(1, (KRYLOV_MAX - its) // KRYLOV_RESTART), M=self._amg_M,
+                                                 residuals=residuals)
+            except Exception as err:  # noqa: BLE001
+                raise CaseError(f"gas.linear_solver = 'pyamg': the pyamg solve failed ({type(err).__name__}: "
+                                f"{err}); use 'multigrid' or 'superlu'") from err
+            its += max(len(residuals) - 1, 1)
+            rn = float(np.linalg.norm(b - A @ x))
+            if not math.isfinite(rn):
+                return None, its
+        rate = (rn / bn) ** (1.0 / max(its, 1))
+        if self._amg_rate0 is None:
+            self._amg_rate0 = rate
+        else:
+            self._amg_stale = rate > max(AMG_RATE, math.sqrt(self._amg_rate0))
+        return x, its
+
     def _factorise(self) -> None:
         """Factorise the assembled pressure-correction matrix (SuperLU) and keep its factors as CSC arrays
         for the compiled triangular solves."""
@@ -830,18 +976,20 @@ class GasSolver:
 
     @property
     def factorisations(self) -> int:
-        """Pressure-matrix factorisations so far (band or SuperLU)."""
+        """Pressure-matrix factorisations so far (band or SuperLU; multigrid and pyamg: hierarchies made)."""
         return int(self._ipar[K.I_NFACT])
 
     @property
     def linear_solver(self) -> str:
-        """'band' (compiled band LU), 'multigrid' (compiled GMRES with a multigrid preconditioner) or
-        'superlu' (SciPy), whichever solves the pressure-correction equations now."""
-        return {K.SOLVER_BAND: "band", K.SOLVER_MULTIGRID: "multigrid"}.get(int(self._ipar[K.I_SOLVER]), "superlu")
+        """'band' (compiled band LU), 'multigrid' (compiled GMRES with a multigrid preconditioner),
+        'superlu' (SciPy) or 'pyamg' (FGMRES with pyamg's algebraic multigrid), whichever solves the
+        pressure-correction equations now."""
+        return {K.SOLVER_BAND: "band", K.SOLVER_MULTIGRID: "multigrid",
+                SOLVER_PYAMG: "pyamg"}.get(int(self._ipar[K.I_SOLVER]), "superlu")
 
     @property
     def krylov_iterations(self) -> int:
-        """GMRES iterations so far (multigrid path; 0 otherwise)."""
+        """GMRES iterations so far (multigrid and pyamg paths; 0 otherwise)."""
         return int(self._ipar[K.I_KRYLOV])
 
     # ------------------------------------------------------------ helpers
@@ -858,7 +1006,8 @@ class GasSolver:
 
 # ================================================================ benchmark
 def gas_step_benchmark(grids=((15, 25), (39, 60), (150, 300)), seconds: float = 2.0, convection: str = "upwind",
-                       moving_bed: tuple[bool, ...] = (False, True), verbose: bool = False) -> list[dict]:
+                       moving_bed: tuple[bool, ...] = (False, True), verbose: bool = False,
+                       linear_solver: str = "auto") -> list[dict]:
     """Wall time of one gas step on standard grids; rows for ``fluidem bench``.
 
     The problem is the Hoomans 1996 single-orifice bed (Table 2 geometry 0.15 m ×
@@ -872,6 +1021,7 @@ def gas_step_benchmark(grids=((15, 25), (39, 60), (150, 300)), seconds: float = 
     cross more than half the smaller cell side in a step (explicit convection):
     dt = min(1e-4, 0.5 min(dx, dy) / 45 m/s). The first 20 steps (compilation, start-up
     transient) are not timed; then ``advance`` alone is timed for about ``seconds`` per row.
+    ``linear_solver``: the ``GasSolver`` option (e.g. "pyamg" against "multigrid").
 
     Returns
     -------
@@ -882,7 +1032,7 @@ def gas_step_benchmark(grids=((15, 25), (39, 60), (150, 300)), seconds: float = 
     rows = []
     for nx, ny in grids:
         for moving in moving_bed:
-            solver, state, beta_of, voidage_at = _bench_problem(nx, ny, convection)
+            solver, state, beta_of, voidage_at = _bench_problem(nx, ny, convection, linear_solver)
             t, dt = 0.0, min(1e-4, 0.5 * min(solver.grid.dx, solver.grid.dy) / 45.0)
             for _ in range(20):
                 solver.advance(state, dt, t, voidage=voidage_at(t + dt) if moving else None, beta=beta_of(state),
@@ -910,7 +1060,7 @@ def gas_step_benchmark(grids=((15, 25), (39, 60), (150, 300)), seconds: float = 
     return rows
 
 
-def _bench_problem(nx: int, ny: int, convection: str = "upwind"):
+def _bench_problem(nx: int, ny: int, convection: str = "upwind", linear_solver: str = "auto"):
     """Solver, state, β(state) and voidage(t) of the benchmark bed on an nx × ny grid."""
     from .boundaries import Segment, Wall
 
@@ -919,7 +1069,7 @@ def _bench_problem(nx: int, ny: int, convection: str = "upwind"):
     bcs = {"left": Wall(), "right": Wall(), "top": PressureOutlet(pressure=101325.0),
            "bottom": Inflow(segments=(Segment(interstitial=4.5), Segment(interstitial=45.0, start=0.07, end=0.08)),
                             voidage=0.4)}
-    solver = GasSolver(grid, props, bcs, convection=convection)
+    solver = GasSolver(grid, props, bcs, convection=convection, linear_solver=linear_solver)
     X, Y = grid.centres()
     state = solver.initial_state(voidage=np.where(Y < 0.2, 0.4, 1.0))
     d_p = 4e-3

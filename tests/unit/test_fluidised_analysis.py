@@ -132,3 +132,58 @@ def test_bubble_is_an_enclosed_void_region_of_at_least_three_cells():
     assert F.bubble_area(g, eps) == 0.0
     eps[0:6, 3:5] = 0.9  # a slug: spans the width, particles above it
     assert F.bubble_area(g, eps) == pytest.approx(12e-4)
+
+
+def test_bubble_regions_are_the_enclosed_voids_largest_first():
+    g = grid(nx=10, ny=10, w=0.1, h=0.1)  # 1 cm cells
+    eps = np.full(g.shape, 0.45)
+    eps[:, 8:] = 1.0  # freeboard
+    eps[1:3, 1:3] = 0.9  # 4 cells
+    eps[6:9, 4:7] = 0.9  # 9 cells
+    eps[5, 1:3] = 0.9  # 2 cells: too small to be a bubble
+    regions = F.bubble_regions(g, eps)
+    assert [int(r.sum()) for r in regions] == [9, 4]
+    assert regions[0][7, 5] and not regions[0][1, 1]
+    assert F.bubble_area(g, eps) == pytest.approx(regions[0].sum() * g.dx * g.dy)
+    with pytest.raises(ValueError, match="shape"):
+        F.bubble_regions(g, eps.T[:, :5])
+
+
+def test_slug_is_a_bubble_spanning_the_column():
+    """Width fraction: the longest row chord of any bubble over nx; a slug reaches 0.8 of the width."""
+    g = grid(nx=10, ny=10, w=0.1, h=0.1)
+    eps = np.full(g.shape, 0.45)
+    eps[:, 8:] = 1.0  # freeboard: a void, but not a bubble
+    assert F.bubble_width_fraction(g, eps) == 0.0 and not F.slug_detected(g, eps)
+    eps[4:7, 2:5] = 0.9  # a round bubble 3 cells wide in the middle
+    assert F.bubble_width_fraction(g, eps) == pytest.approx(0.3)
+    assert not F.slug_detected(g, eps)
+    eps[1:9, 3] = 0.9  # the bubble grows sideways to 8 of 10 cells in one row: a slug (0.8)
+    assert F.bubble_width_fraction(g, eps) == pytest.approx(0.8)
+    assert F.slug_detected(g, eps)
+    assert not F.slug_detected(g, eps, min_width_fraction=0.9)
+    eps[1, 3] = 0.45  # 7 of 10: a large bubble, not yet a slug
+    assert F.bubble_width_fraction(g, eps) == pytest.approx(0.7) and not F.slug_detected(g, eps)
+    eps[:, 3] = 0.9  # wall to wall
+    assert F.bubble_width_fraction(g, eps) == pytest.approx(1.0) and F.slug_detected(g, eps)
+    eps[:, 3:8] = 0.9  # the slug erupts into the freeboard: no longer a bubble, no slug
+    assert F.bubble_width_fraction(g, eps) == 0.0 and not F.slug_detected(g, eps)
+
+
+def test_slug_chord_spans_particle_strands_but_not_a_tilted_bubble():
+    g = grid(nx=10, ny=10, w=0.1, h=0.1)
+    eps = np.full(g.shape, 0.45)
+    eps[:, 8:] = 1.0
+    eps[0:10, 2] = 0.9  # a slug row ...
+    eps[4:6, 2] = 0.5  # ... with a strand of particles through it, joined below
+    eps[3:7, 1] = 0.9
+    assert len(F.bubble_regions(g, eps)) == 1
+    assert F.bubble_width_fraction(g, eps) == pytest.approx(1.0) and F.slug_detected(g, eps)
+    eps = np.full(g.shape, 0.45)
+    eps[:, 8:] = 1.0
+    for k in range(7):  # a tilted bubble: a staircase from the left wall up to the right, two cells per row ...
+        eps[k:k + 2, k] = 0.9
+    eps[7:10, 6] = 0.9  # ... and four in its top row
+    assert len(F.bubble_regions(g, eps)) == 1
+    assert F.bubble_width_fraction(g, eps) == pytest.approx(0.4)  # its bounding box spans the width; no row does
+    assert not F.slug_detected(g, eps)

@@ -122,6 +122,61 @@ def bubble_area(grid, voidage: np.ndarray, threshold: float = BUBBLE_VOIDAGE) ->
     return float(best * grid.dx * grid.dy) if best >= BUBBLE_MIN_CELLS else 0.0
 
 
+# A slug is a bubble as wide as the column (issue 5: "touches or nearly touches both side
+# walls"). The usual rule of thumb has bubbles turn into slugs once they grow past about two
+# thirds of the column width; 0.8 is stricter, so a large bubble in the middle of the bed is
+# not called a slug, while it leaves room for the particles that slide down the walls past a
+# slug, which keep a wall cell below ε = 0.8. On Hoomans' grid (15 cells of 10 mm) that is 12
+# of the 15 cells of one row.
+SLUG_WIDTH_FRACTION = 0.8
+
+
+def bubble_regions(grid, voidage: np.ndarray, threshold: float = BUBBLE_VOIDAGE) -> list[np.ndarray]:
+    """The bubbles that ``bubble_area`` considers, as boolean masks (nx, ny), largest first.
+
+    A bubble is a 4-connected region of cells with ε > ``threshold`` not connected to the
+    top row (the freeboard) and of at least ``BUBBLE_MIN_CELLS`` cells; the largest mask's
+    area is ``bubble_area``.
+    """
+    from scipy import ndimage
+
+    eps = np.asarray(voidage)
+    if eps.shape != tuple(grid.shape):
+        raise ValueError(f"voidage has shape {eps.shape}; the grid's cells are {tuple(grid.shape)}")
+    labels, n = ndimage.label(eps > threshold)
+    if n == 0:
+        return []
+    free = set(np.unique(labels[:, -1])) - {0}
+    sizes = np.bincount(labels.ravel(), minlength=n + 1)
+    keep = [k for k in range(1, n + 1) if k not in free and sizes[k] >= BUBBLE_MIN_CELLS]
+    keep.sort(key=lambda k: -sizes[k])
+    return [labels == k for k in keep]
+
+
+def bubble_width_fraction(grid, voidage: np.ndarray, threshold: float = BUBBLE_VOIDAGE) -> float:
+    """The widest horizontal chord of any bubble over the column width (0.0 without a bubble).
+
+    The chord of a bubble in a cell row runs from its leftmost to its rightmost cell in that
+    row (inclusive), so a strand of particles inside a slug does not shorten it; the result is
+    the largest chord over all rows and bubbles, in cells over ``nx`` (1.0: wall to wall).
+    """
+    best = 0
+    for mask in bubble_regions(grid, voidage, threshold):
+        for j in np.flatnonzero(mask.any(axis=0)):
+            cols = np.flatnonzero(mask[:, j])
+            best = max(best, int(cols[-1] - cols[0] + 1))
+    return best / grid.nx
+
+
+def slug_detected(grid, voidage: np.ndarray, threshold: float = BUBBLE_VOIDAGE,
+                  min_width_fraction: float = SLUG_WIDTH_FRACTION) -> bool:
+    """Whether the bed holds a slug: a bubble (see ``bubble_regions``) whose chord in some cell row
+    spans at least ``min_width_fraction`` of the column width (``bubble_width_fraction``), i.e. a
+    void that reaches, or nearly reaches, both side walls. A void open to the freeboard (a slug
+    erupting at the surface) is no longer a bubble and so no slug."""
+    return bubble_width_fraction(grid, voidage, threshold) >= min_width_fraction - 1e-12
+
+
 def bed_probes(sim) -> dict[str, float]:
     """probes.csv columns of a fluidised bed: N_c statistics, mean height, pressure drop."""
     eng = sim.engine

@@ -60,8 +60,10 @@ class GasCoupling:
 
     Sets ``engine.dt`` to DT / substeps on construction. ``last_map`` is the ``SolidsMap`` of the
     last gas step (at construction: the initial one) and ``last_beta`` the cell β (nx, ny)
-    [kg m^-3 s^-1] that step gave the gas (None before the first gas step of this object);
-    analyses may read both, never write them.
+    [kg m^-3 s^-1] of that step (None before the first gas step of this object): the β the gas
+    took ("cell", "cell_beta"), or Σ_{p in cell} K_p / V_cell ("particle", whose gas took the
+    face values ``last_face_beta``, a pair of x- and y-face arrays); analyses may read them,
+    never write them.
     """
 
     def __init__(self, case, engine):

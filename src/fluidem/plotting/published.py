@@ -134,8 +134,8 @@ PUBLISHED: dict[str, tuple[PublishedValue, ...]] = {
                        "Fig 3 (not given numerically)", "Sun et al. 2007, central jet",
                        summary_key="pressure_20cm_dominant_frequency_Hz", unit="Hz", digits=3,
                        window_text="power spectrum over", **_SUN_AVERAGE),
-        PublishedValue("largest contact force / drag", "up to 100", "Sun et al. 2007 Fig 7, corners beside the jet",
-                       see="the forces figure"),
+        PublishedValue("largest contact force / drag (cell means; this run: its end state)", "up to 100", "Sun et al. 2007 Fig 7, corners beside the jet",
+                       summary_key="contact_drag_ratio_max", digits=3, when_missing="not measured; see the forces figure"),
     ),
     "goldschmidt": (
         PublishedValue("mean particle height", "8.9 cm (TF-DEM, cell-averaged drag)",
@@ -147,8 +147,8 @@ PUBLISHED: dict[str, tuple[PublishedValue, ...]] = {
                        summary_key="coordination_number_avg", **_SUN_AVERAGE),
         PublishedValue("multicontact ratio", "about 0.3", "Sun et al. 2007 Fig 11, uniform inflow",
                        summary_key="multicontact_ratio_avg", **_SUN_AVERAGE),
-        PublishedValue("largest contact force / drag", "at most 15", "Sun et al. 2007 Fig 12, uniform inflow",
-                       see="the forces figure"),
+        PublishedValue("largest contact force / drag (cell means; this run: its end state)", "at most 15", "Sun et al. 2007 Fig 12, uniform inflow",
+                       summary_key="contact_drag_ratio_max", digits=3, when_missing="not measured; see the forces figure"),
     ),
 }
 

@@ -1,12 +1,14 @@
 """Hard-sphere runs through Simulation and the command line: summary keys, probes, resume.
 
 Short runs of the built-in ``hoomans-pour`` (no gas) and ``hoomans-orifice`` (coupled)
-cases. The energy balance itself is verified in tests/verification/test_hardsphere_pour.py.
+cases, and the start-up of the Table 2 gas cases (u_mf background before the jet onset T0).
+The energy balance itself is verified in tests/verification/test_hardsphere_pour.py.
 """
 import csv
 import json
 
 import numpy as np
+import pytest
 
 from fluidem.case import load_case
 from fluidem.cli import main
@@ -50,3 +52,28 @@ def test_coupled_hard_sphere_bed_runs_with_gas(tmp_path):
     assert s["gas_steps"] == 200 and s["dem_substeps"] == 1  # collisions within each gas step DT
     assert "energy_error_rel" not in s  # the gas does work: no closed energy balance
     assert (out / "gas.h5").exists()
+
+
+T0 = 0.5  # [s] jet onset of the Table 2 cases (tests/validation/test_hoomans1996.py)
+
+
+@pytest.mark.parametrize("name, jet", [("hoomans-orifice", 45.0), ("hoomans-slug", 7.5), ("hoomans-tsuji", 6.5)])
+def test_table2_cases_start_at_umf_and_switch_the_jet_on_at_t0(name, jet):
+    """Hoomans §4.1 start-up: 4.5 m/s interstitial on every bottom face before T0, the case's inflow from T0
+    (the central face for an orifice, every face for the uniform inflow), and T0 + 1 s simulated (§5.3)."""
+    case = load_case(name)
+    assert case.time.end == pytest.approx(T0 + 1.0)
+    grid = case.gas.grid.build()
+    bottom = case.gas.boundaries["bottom"].build()
+    weights = bottom.face_weights(grid.x_faces)
+
+    def faces(t):
+        return bottom.velocities(t) @ weights
+
+    for t in (0.0, 0.25, T0 - 1e-4):
+        assert np.allclose(faces(t), 4.5)
+    for t in (T0, T0 + 1e-4, T0 + 1.0):
+        v = faces(t)
+        expected = np.full(grid.nx, 4.5)
+        expected[slice(None) if name == "hoomans-slug" else grid.nx // 2] = jet
+        assert np.allclose(v, expected), (t, v)

@@ -17,33 +17,41 @@ Published (Hoomans 1996):
 - §5.2, ``hoomans-tsuji`` (Tsuji's 6.5 m/s interstitial orifice, non-ideal particles):
   "no bubble formation was observed", only a slightly raised porosity above the jet.
 
-Criteria, evaluated on every gas snapshot (``gas.h5``, every 10 ms, 101 per run) with
-the functions of ``fluidem.analysis.fluidised``, from ``STARTUP_S`` = 0.3 s on except the
-bubble at the orifice (why: the comment at ``STARTUP_S``):
+Start-up (Hoomans §4.1, the case files): 0 to T0 = 0.5 s the lattice under the u_mf background alone
+(4.5 m/s interstitial on every bottom cell); from T0 the case's inflow, to T0 + 1 s. Without the jet the
+ideal bed settles at 128.7 mm (mean particle height, 127.6-131.1 mm over T0-0.2 to T0) without bubbles;
+the non-ideal bed fluctuates about ~140-145 mm (136.3-148.5 mm) and already bubbles at the u_mf background
+(up to 50 cm2 from T0-0.13 s on, no slug).
+
+Criteria, evaluated on every gas snapshot (``gas.h5``, every 10 ms, 101 from T0 on) with the functions of
+``fluidem.analysis.fluidised``, from the jet onset ``CHECK_FROM`` = T0 on:
 - bubble (``bubble_area``/``bubble_regions``): a 4-connected region of cells with
   ε > 0.8 (``BUBBLE_VOIDAGE``) not connected to the freeboard, of at least 3 cells
   (``BUBBLE_MIN_CELLS``; the one-cell jet channel at the orifice is no bubble).
 - slug (``slug_detected``): a bubble whose chord in one cell row spans at least 0.8 of
   the column width (``SLUG_WIDTH_FRACTION``; 12 of the 15 cells), i.e. a void that
   reaches, or nearly reaches, both side walls.
-- at the orifice: the first bubble contains a cell of the orifice column (the central
-  one of the 15, where Hoomans' jet enters) in the lowest ``ORIFICE_ROWS`` rows.
+- at the orifice: the first bubble from T0 on contains a cell of the orifice column (the
+  central one of the 15, where Hoomans' jet enters) in the lowest ``ORIFICE_ROWS`` rows.
 - pressure peaks: standard deviation and peak-to-peak of the probe
-  ``pressure_20cm_gauge_Pa`` (``probes.csv``, every 1 ms) from ``STARTUP_S`` to 1 s;
+  ``pressure_20cm_gauge_Pa`` (``probes.csv``, every 1 ms) from T0 to T0 + 1 s;
   "strongest peaks" is read as at least ``PEAK_RATIO`` times the ideal run's, both
   statistics.
 
-What this model gave last (1 s each; snapshots every 10 ms):
-- orifice, non-ideal: first bubble 0.04 s on the orifice, slug from 0.42 s, largest bubble
-  346 cm²; ideal: bubbles of up to 50 cm² until 0.41 s, no slug. Pressure 20 cm up over
-  0.3–1 s: std 634 vs 137 Pa, peak-to-peak 2554 vs 555 Pa (non-ideal vs ideal).
-- slug case, non-ideal: slugs at 42 snapshots in 0.3–0.78 s; ideal: no slug after the
-  start-up, bubbles of up to 72 cm² until 0.49 s. Pressure: std 717 vs 160 Pa,
-  peak-to-peak 2197 vs 617 Pa.
-- Tsuji's jet: bubbles from 0.31 s, up to 124 cm², a slug at 0.59–0.62 s.
+What this model gave last (T0 + 1 s each, times from the jet onset T0; 2026-11-22):
+- orifice, non-ideal: the u_mf bubble of the start-up is there at T0 (orifice-column rows 6-8, not on
+  the orifice), bubbles in all 101 snapshots, slugs from T0+0.08 s (82 snapshots), largest bubble
+  390 cm2 at T0+0.42 s; ideal: bubbles T0+0.04 to T0+0.88 s up to 198 cm2, slugs at T0+0.38-0.52 s.
+  Pressure 20 cm up from T0: std 2216 vs 369 Pa, peak-to-peak 6631 vs 1088 Pa (non-ideal vs ideal).
+- slug case, non-ideal: slugs in 97 snapshots, T0+0.04 s to the end, bubbles up to 466 cm2; ideal:
+  the bed lifts on a full-width gas gap at the onset, slugs T0+0.08 to T0+0.50 s (31 snapshots), bubbles
+  up to 274 cm2 until T0+0.85 s. Pressure: std 4262 vs 429 Pa, peak-to-peak 11641 vs 1299 Pa.
+- Tsuji's jet: bubbles in 90 snapshots T0 to the end, up to 120 cm2 at T0+0.09 s, slugs in 44
+  snapshots from T0+0.02 s.
 Disagreements with the paper are strict xfails with these numbers in their reasons; they
 turn into failures the day the model agrees, so the notes are revisited.
-Each run takes 30 s on an idle 2-core machine, up to 90 s on a busy one (five runs).
+Each run of 1.5 s takes 90-460 s on a busy 2-core machine (the non-ideal orifice run the slowest,
+6.4e7 collisions); the five ran in 16 min.
 """
 from __future__ import annotations
 
@@ -62,19 +70,22 @@ from fluidem.io import read_gas_fields
 
 pytestmark = pytest.mark.validation
 
-SIM_TIME = 1.0  # [s] "the simulations were continued for one second real time" (Hoomans §5.3)
+# Start-up (Hoomans §4.1; the case files): 0-T0 the lattice under the minimum-fluidisation background
+# alone (4.5 m/s interstitial everywhere, 1.8 m/s superficial, u_mf 1.77 m/s); from T0 the case's own
+# inflow (the jet). Measured without the jet (4.5 m/s only, 1 s, mean particle height per 0.1 s): ideal
+# particles settle at 128.3-129.0 mm from 0.2 s on; non-ideal ones collapse (124 mm at 0.1-0.2 s), lift
+# (148 mm at 0.4-0.5 s) and fluctuate about ~140 mm (134.7-148.1 mm over 0.3-1 s; potential energy
+# 0.287-0.315 J about 0.30 J). Before T0 every run of one particle kind is identical (same inflow,
+# deterministic), as Hoomans' "identical initial conditions" (§5.3).
+T0 = 0.5  # [s] jet onset; all times below are from t = 0, reported also relative to T0
+SIM_TIME = T0 + 1.0  # [s] "the simulations were continued for one second real time" (Hoomans §5.3)
 IDEAL = ("--set", "particles.contact.restitution=1.0", "--set", "particles.contact.friction=0.0")  # e = e_w, μ = μ_w
-# Start-up. Hoomans (§4.1) started from a bed already brought to minimum fluidisation; the
-# case files switch the full gas flow on at t = 0 into a bed at rest on a lattice (their
-# "our reading"). The first tenths of a second therefore have no counterpart in the paper: the
-# gauge pressure 20 cm up rises from 0 to the weight of the bed above it (not a peak), and a
-# uniform inflow lifts the packed bed off the distributor as one plug over a gas gap that
-# spans the column (a "slug" by the criterion, for ideal particles too). Hoomans: the ideal
-# bed height "remains relatively constant" after 0.3 s; the statements about the state of the
-# bed (no bubble, slugs / no slugs) and the pressure statistics are therefore taken from
-# 0.3 s on, for both particle kinds alike. The bubble at the orifice forms when the jet comes
-# on, as in the paper, and is looked for over the whole run.
-STARTUP_S = 0.3
+# The statements about the state of the bed (no bubble, slugs / no slugs), the pressure statistics and
+# the bubble at the orifice are taken from the jet onset T0 on (CHECK_FROM), for both particle kinds.
+# The onset has a transient (the step in inflow lifts the ideal bed on a full-width gas gap: slugs at
+# T0+0.08 to T0+0.50 s in the slug case); it lasts half of the second the paper describes, so no offset
+# is taken for it.
+CHECK_FROM = T0
 # "The line with the strongest peaks" (Figs 11, 13): the non-ideal run's fluctuations must be
 # at least twice the ideal run's, in standard deviation and in peak-to-peak. A factor 2 is a
 # modest reading of "strongest" that still excludes two runs of similar bubbling.
@@ -95,41 +106,48 @@ class Bed:
     area: np.ndarray  # largest bubble area per snapshot [m²]
     width: np.ndarray  # widest bubble chord per snapshot, fraction of the column width
     slug: np.ndarray  # slug_detected per snapshot
-    first_bubble: np.ndarray | None  # mask (nx, ny) of the largest bubble at the first snapshot with one
+    first_bubble: np.ndarray | None  # mask (nx, ny) of the largest bubble at the first snapshot from CHECK_FROM with one
     orifice_column: int
     probe_time: np.ndarray = field(repr=False)
     pressure: np.ndarray = field(repr=False)  # pressure_20cm_gauge_Pa [Pa]
+    height: np.ndarray = field(repr=False)  # mean_particle_height_m [m]
 
-    def pressure_stats(self, start=STARTUP_S) -> tuple[float, float]:
+    def pressure_stats(self, start=CHECK_FROM) -> tuple[float, float]:
         """(standard deviation, peak-to-peak) [Pa] of the gauge pressure 20 cm up from ``start`` on."""
         s = self.pressure[self.probe_time >= start - 1e-9]
         return float(s.std()), float(np.ptp(s))
 
     def settled(self) -> np.ndarray:
-        """Snapshots after the start-up (t >= STARTUP_S)."""
-        return self.time >= STARTUP_S - 1e-9
+        """Snapshots from the jet onset on (t >= CHECK_FROM)."""
+        return self.time >= CHECK_FROM - 1e-9
 
     def times(self, mask) -> str:
-        t = self.time[mask]
-        return f"{t.size} snapshots" + (f", {t[0]:.2f}-{t[-1]:.2f} s" if t.size else "")
+        """Count and span of the snapshots in ``mask``, times after the jet onset T0."""
+        t = self.time[mask] - T0
+        return f"{t.size} snapshots" + (f", T0{t[0]:+.2f} to T0{t[-1]:+.2f} s" if t.size else "")
 
     def describe(self) -> str:
-        k = int(self.area.argmax())
+        late = self.settled()
+        k = int(np.flatnonzero(late)[self.area[late].argmax()])
+        kw = int(np.flatnonzero(late)[self.width[late].argmax()])
         sd, pp = self.pressure_stats()
         sd0, pp0 = self.pressure_stats(0.0)
-        late = self.settled()
-        return (f"{self.label}: wall {self.wall_s:.0f} s; max bubble {self.area.max() * 1e4:.0f} cm2 at "
-                f"{self.time[k]:.2f} s; bubbles {self.times(self.area > 0)}; max width {self.width.max():.2f} "
-                f"at {self.time[int(self.width.argmax())]:.2f} s; slugs {self.times(self.slug)}; after "
-                f"{STARTUP_S} s: max bubble {self.area[late].max() * 1e4:.0f} cm2, bubbles "
-                f"{self.times(late & (self.area > 0))}, slugs {self.times(late & self.slug)}; p20 gauge "
-                f"std {sd:.0f} Pa, p2p {pp:.0f} Pa from {STARTUP_S} s (from 0 s: {sd0:.0f}, {pp0:.0f}); "
-                f"probe max bubble {self.summary.get('bubble_max_area_m2', float('nan')) * 1e4:.0f} cm2")
+        h = self.height
+        before = (self.probe_time >= T0 - 0.2 - 1e-9) & (self.probe_time < T0 - 1e-9)
+        return (f"{self.label}: wall {self.wall_s:.0f} s; start-up (t < T0 = {T0} s): max bubble "
+                f"{self.area[~late].max() * 1e4:.0f} cm2, bubbles {self.times(~late & (self.area > 0))}, slugs "
+                f"{self.times(~late & self.slug)}, mean height over T0-0.2 to T0 {h[before].mean() * 1e3:.1f} mm "
+                f"({h[before].min() * 1e3:.1f}-{h[before].max() * 1e3:.1f}); from T0: max bubble "
+                f"{self.area[k] * 1e4:.0f} cm2 at T0{self.time[k] - T0:+.2f} s, bubbles "
+                f"{self.times(late & (self.area > 0))}, max width {self.width[kw]:.2f} at T0{self.time[kw] - T0:+.2f} s, "
+                f"slugs {self.times(late & self.slug)}; p20 gauge std {sd:.0f} Pa, p2p {pp:.0f} Pa from T0 "
+                f"(from 0 s: {sd0:.0f}, {pp0:.0f}); mean height from T0 {h[self.probe_time >= T0 - 1e-9].mean() * 1e3:.1f} mm")
 
 
 def run_bed(tmp_path_factory, case: str, label: str, extra=()) -> Bed:
     out = tmp_path_factory.mktemp(label) / "run"
     t0 = time.perf_counter()
+    assert fd.load_case(case).time.end == pytest.approx(SIM_TIME)  # the case file's T0 + 1 s
     assert main(["run", case, "--until", str(SIM_TIME), "--out", str(out), "--quiet", *extra]) == 0
     wall = time.perf_counter() - t0
     summary = json.loads((out / "summary.json").read_text())
@@ -141,15 +159,17 @@ def run_bed(tmp_path_factory, case: str, label: str, extra=()) -> Bed:
     width = np.array([F.bubble_width_fraction(grid, e) for e in eps])
     slug = np.array([F.slug_detected(grid, e) for e in eps])
     first = None
-    if (area > 0).any():
-        first = F.bubble_regions(grid, eps[int(np.flatnonzero(area > 0)[0])])[0]
+    onset = (area > 0) & (gas["time"] >= CHECK_FROM - 1e-9)
+    if onset.any():
+        first = F.bubble_regions(grid, eps[int(np.flatnonzero(onset)[0])])[0]
     with open(out / "probes.csv", newline="") as f:
         rows = list(csv.DictReader(f))
     bed = Bed(label=label, summary=summary, wall_s=wall, time=gas["time"], area=area, width=width, slug=slug,
               first_bubble=first, orifice_column=grid.nx // 2,
               probe_time=np.array([float(r["time_s"]) for r in rows]),
-              pressure=np.array([float(r["pressure_20cm_gauge_Pa"]) for r in rows]))
-    assert bed.time[-1] == pytest.approx(SIM_TIME) and bed.time.size >= 50
+              pressure=np.array([float(r["pressure_20cm_gauge_Pa"]) for r in rows]),
+              height=np.array([float(r["mean_particle_height_m"]) for r in rows]))
+    assert bed.time[-1] == pytest.approx(SIM_TIME) and bed.settled().sum() >= 50
     print("\n" + bed.describe())
     return bed
 
@@ -182,30 +202,39 @@ def tsuji(tmp_path_factory):
 # §5.3.1, Figs 10-11: single orifice at 10 u_mf
 
 
+@pytest.mark.xfail(strict=True, reason=(
+    "from the jet onset T0 the first bubble is the one the non-ideal bed already forms at the u_mf background "
+    "(up to 50 cm2 from T0-0.13 s): at T0 it sits at orifice-column rows 6-8 (12-18 cm up), not in the lowest 2; "
+    "slugs follow from T0+0.08 s (82 of 101 snapshots), largest bubble 390 cm2; Hoomans Fig 10 a, c: a bubble "
+    "forms at the orifice and turns into a slug"))
 def test_orifice_nonideal_bubble_forms_at_the_orifice_and_grows_into_a_slug(orifice):
-    bubbles = np.flatnonzero(orifice.area > 0)
+    late = orifice.settled()
+    bubbles = np.flatnonzero(late & (orifice.area > 0))
     assert bubbles.size, orifice.describe()
     k0 = bubbles[0]
     rows = np.flatnonzero(orifice.first_bubble[orifice.orifice_column])
     assert rows.size and rows[0] < ORIFICE_ROWS, \
-        f"first bubble ({orifice.time[k0]:.2f} s) not on the orifice: orifice-column rows {rows.tolist()}"
+        f"first bubble (T0{orifice.time[k0] - T0:+.2f} s) not on the orifice: orifice-column rows {rows.tolist()}"
     assert not orifice.slug[k0], "the first bubble is already a slug"
-    assert orifice.slug.any(), orifice.describe()
-    assert orifice.time[np.flatnonzero(orifice.slug)[0]] > orifice.time[k0]
+    assert (late & orifice.slug).any(), orifice.describe()
+    assert orifice.time[np.flatnonzero(late & orifice.slug)[0]] > orifice.time[k0]
 
 
 @pytest.mark.xfail(strict=True, reason=(
-    "ideal particles (e = 1, mu = 0): after the 0.3 s start-up still bubbles (eps > 0.8, >= 3 cells) of up to "
-    "42 cm2 at 0.30-0.41 s (50 cm2 at 0.23 s), none later, never a slug (widest 0.53 of the column); Hoomans "
-    "Fig 10 b, d: no bubble formation (the non-ideal run here: 346 cm2 and a slug)"))
+    "ideal particles (e = 1, mu = 0): none in the u_mf start-up, but from the jet onset T0 bubbles (eps > 0.8, "
+    ">= 3 cells) at T0+0.04 to T0+0.88 s (56 snapshots), up to 198 cm2 at T0+0.41 s, slugs at T0+0.38-0.52 s; "
+    "Hoomans Fig 10 b, d: no bubble formation (the non-ideal run here: 390 cm2 and slugs)"))
 def test_orifice_ideal_forms_no_bubble(orifice_ideal):
     assert not (orifice_ideal.area[orifice_ideal.settled()] > 0).any(), orifice_ideal.describe()
 
 
+@pytest.mark.xfail(strict=True, reason=(
+    "from T0: largest bubble 390 cm2 (non-ideal, T0+0.42 s) vs 198 cm2 (ideal, T0+0.41 s), ratio 1.97 < 2"))
 def test_orifice_ideal_bubbles_are_far_smaller_than_nonideal(orifice, orifice_ideal):
-    """The contrast of Fig 10 read relatively (the absolute reading, no bubble, is the xfail above): over the
-    whole run the non-ideal bed's largest bubble is at least PEAK_RATIO times the ideal bed's."""
-    assert orifice.area.max() >= PEAK_RATIO * orifice_ideal.area.max(), \
+    """The contrast of Fig 10 read relatively (the absolute reading, no bubble, is the xfail above): from the
+    jet onset on the non-ideal bed's largest bubble is at least PEAK_RATIO times the ideal bed's."""
+    late, late_i = orifice.settled(), orifice_ideal.settled()
+    assert orifice.area[late].max() >= PEAK_RATIO * orifice_ideal.area[late_i].max(), \
         f"{orifice.describe()}\n{orifice_ideal.describe()}"
 
 
@@ -224,14 +253,17 @@ def test_slug_case_nonideal_particles_slug(slug):
     assert slug.slug[slug.settled()].any(), slug.describe()
 
 
+@pytest.mark.xfail(strict=True, reason=(
+    "ideal particles: when the inflow steps from 4.5 to 7.5 m/s at T0 the settled bed lifts on a full-width "
+    "gas gap, slugs at T0+0.08 to T0+0.50 s (31 of 101 snapshots, widest 1.00 of the column); Hoomans Fig 12 "
+    "b, d: no slugging at all"))
 def test_slug_case_ideal_particles_never_slug(slug_ideal):
     assert not slug_ideal.slug[slug_ideal.settled()].any(), slug_ideal.describe()
 
 
 @pytest.mark.xfail(strict=True, reason=(
-    "ideal particles at 1.75 u_mf: after the 0.3 s start-up bubbles (eps > 0.8, >= 3 cells) of up to 72 cm2 at "
-    "0.30-0.49 s, none later, and no slug (in the start-up the bed lifts as a plug over a full-width gas gap at "
-    "0.09-0.12 s); Hoomans Fig 12 b, d: homogeneous expansion"))
+    "ideal particles at 1.75 u_mf: from T0 bubbles (eps > 0.8, >= 3 cells) at T0+0.06 to T0+0.85 s (55 "
+    "snapshots), up to 274 cm2 at T0+0.45 s, slugs at T0+0.08-0.50 s; Hoomans Fig 12 b, d: homogeneous expansion"))
 def test_slug_case_ideal_bed_expands_homogeneously(slug_ideal):
     assert not (slug_ideal.area[slug_ideal.settled()] > 0).any(), slug_ideal.describe()
 
@@ -248,8 +280,9 @@ def test_slug_case_pressure_peaks_stronger_for_nonideal_particles(slug, slug_ide
 
 
 @pytest.mark.xfail(strict=True, reason=(
-    "hoomans-tsuji (6.5 m/s interstitial jet, e = 0.9, mu = 0.3): bubbles from 0.31 s to the end, up to 124 cm2 "
-    "at 0.60 s, and a slug lifting the bed as a plug at 0.59-0.62 s; Hoomans §5.2 (and his experiment with 4 mm "
-    "glass beads): no bubble formation, only a slightly raised porosity above the jet"))
+    "hoomans-tsuji (6.5 m/s interstitial jet, e = 0.9, mu = 0.3): the bed bubbles already at the u_mf background "
+    "(50 cm2 before T0); from T0 bubbles in 90 of 101 snapshots, up to 120 cm2 at T0+0.09 s, slugs in 44 from "
+    "T0+0.02 s; Hoomans §5.2 (and his experiment with 4 mm glass beads): no bubble formation, only a slightly "
+    "raised porosity above the jet"))
 def test_tsuji_jet_forms_no_bubble(tsuji):
     assert not (tsuji.area[tsuji.settled()] > 0).any(), tsuji.describe()

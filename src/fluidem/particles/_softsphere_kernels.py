@@ -13,6 +13,9 @@ from numba import njit, prange
 
 from ._neighbours_kernels import build_pairs, carry_history
 from .contact._dispatch import contact_force
+from .contact.base import N_SLOTS
+
+assert N_SLOTS == 8, "_law reads the 8 slots of a packed contact row"
 
 # wall motion kinds (walls.py builds the table)
 STATIC, CONSTANT_VELOCITY, OSCILLATING = 0, 1, 2
@@ -36,87 +39,144 @@ def wall_state(motion, point0, w, t):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _pair(i, j, p, pos, vel, omega, radius, mass, species, pp, hist, dt, update):
-    """(in contact, F on i (3), −n × F_t (3)) of pair (i, j) at list slot p; updates hist[p]."""
-    rx = pos[i, 0] - pos[j, 0]
-    ry = pos[i, 1] - pos[j, 1]
-    rz = pos[i, 2] - pos[j, 2]
-    r2 = rx * rx + ry * ry + rz * rz
-    cut = radius[i] + radius[j]
-    if r2 >= cut * cut:
-        if hist[p, 0] != 0.0 or hist[p, 1] != 0.0 or hist[p, 2] != 0.0:  # write only when needed (memory traffic)
-            hist[p, 0] = 0.0
-            hist[p, 1] = 0.0
-            hist[p, 2] = 0.0
-        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    r = math.sqrt(r2)
-    inv_r = 1.0 / r
-    nx = rx * inv_r
-    ny = ry * inv_r
-    nz = rz * inv_r
-    m_eff = mass[i] * mass[j] / (mass[i] + mass[j])
-    r_eff = radius[i] * radius[j] / (radius[i] + radius[j])
-    # lever arms a_i r/(a_i + a_j) and a_j r/(a_i + a_j): they meet at one contact point and add up
-    # to the centre distance (Sun 2007 eq. 24 takes r/2 for equal spheres), so friction conserves
-    # angular momentum; the contact-point velocity (eq. 19) uses the same levers.
-    lever = r / cut
-    wx = (radius[i] * omega[i, 0] + radius[j] * omega[j, 0]) * lever
-    wy = (radius[i] * omega[i, 1] + radius[j] * omega[j, 1]) * lever
-    wz = (radius[i] * omega[i, 2] + radius[j] * omega[j, 2]) * lever
-    fn, ftx, fty, ftz, hx, hy, hz = contact_force(
-        pp[species[i], species[j]], cut - r, nx, ny, nz,
-        vel[i, 0] - vel[j, 0], vel[i, 1] - vel[j, 1], vel[i, 2] - vel[j, 2],
-        wx, wy, wz, m_eff, r_eff, dt, hist[p, 0], hist[p, 1], hist[p, 2], update)
-    hist[p, 0] = hx
-    hist[p, 1] = hy
-    hist[p, 2] = hz
-    # torque on i: (−ℓ_i n) × F_t = ℓ_i (−n × F_t); on j: (ℓ_j n) × (−F_t) = ℓ_j (−n × F_t), ℓ = a r/(a_i + a_j);
-    # the caller multiplies by a_i or a_j (Sun 2007 eq. 24 with the levers above)
-    return (True, fn * nx + ftx, fn * ny + fty, fn * nz + ftz,
-            -(ny * ftz - nz * fty) * lever, -(nz * ftx - nx * ftz) * lever, -(nx * fty - ny * ftx) * lever)
+def _law(table, a, b):
+    """Row (a, b) of a packed contact table as a tuple of scalars.
+
+    ``table[a, b]`` would create an array view, and each view costs an atomic reference-count
+    increment and decrement (two out-of-line calls) per contact; a tuple of scalars costs nothing."""
+    return (table[a, b, 0], table[a, b, 1], table[a, b, 2], table[a, b, 3], table[a, b, 4], table[a, b, 5],
+            table[a, b, 6], table[a, b, 7])
 
 
 @njit(cache=True, error_model="numpy", fastmath=True)
 def _slab_pairs(s, pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
                 dt, update, sum_f, sum_c):
-    """Pairs owned by the particles of slab s, added into the sums (compiled outside the parallel loop,
-    which lets LLVM optimise it as plain serial code: about 1.5x faster than the same body inside prange)."""
+    """Pairs owned by the particles of slab s, added into the sums.
+
+    One pair (i, j) at list slot p: F on i is +F, on j −F; both get the same −n × F_t times
+    their lever (Sun 2007 eq. 24, see below). The owner's sums are kept in registers over its
+    row and added once. The body is written out here rather than in helpers taking arrays:
+    an inlined helper made Numba copy array references, i.e. an atomic reference-count
+    increment and decrement (two calls) per pair. Compiled outside the parallel loop, which
+    lets LLVM optimise it as plain serial code.
+    """
     for m in range(slab_start[s], slab_start[s + 1]):
         i = slab_members[m]
-        for p in range(row_start[i], row_start[i + 1]):
+        r0 = row_start[i]
+        r1 = row_start[i + 1]
+        if r0 == r1:
+            continue
+        xi = pos[i, 0]
+        yi = pos[i, 1]
+        zi = pos[i, 2]
+        ai = radius[i]
+        mi = mass[i]
+        si = species[i]
+        vxi = vel[i, 0]
+        vyi = vel[i, 1]
+        vzi = vel[i, 2]
+        oxi = ai * omega[i, 0]
+        oyi = ai * omega[i, 1]
+        ozi = ai * omega[i, 2]
+        fxi = 0.0
+        fyi = 0.0
+        fzi = 0.0
+        cxi = 0.0
+        cyi = 0.0
+        czi = 0.0
+        for p in range(r0, r1):
             j = partner[p]
-            touch, fx, fy, fz, cx, cy, cz = _pair(i, j, p, pos, vel, omega, radius, mass, species, pp, hist, dt,
-                                                  update)
-            if touch:
-                sum_f[i, 0] += fx
-                sum_f[i, 1] += fy
-                sum_f[i, 2] += fz
-                sum_f[j, 0] -= fx
-                sum_f[j, 1] -= fy
-                sum_f[j, 2] -= fz
-                sum_c[i, 0] += cx
-                sum_c[i, 1] += cy
-                sum_c[i, 2] += cz
-                sum_c[j, 0] += cx
-                sum_c[j, 1] += cy
-                sum_c[j, 2] += cz
+            rx = xi - pos[j, 0]
+            ry = yi - pos[j, 1]
+            rz = zi - pos[j, 2]
+            r2 = rx * rx + ry * ry + rz * rz
+            aj = radius[j]
+            cut = ai + aj
+            if r2 >= cut * cut:
+                h0 = hist[p, 0]
+                h1 = hist[p, 1]
+                h2 = hist[p, 2]
+                if (h0 != 0.0) | (h1 != 0.0) | (h2 != 0.0):  # write only when needed (memory traffic)
+                    hist[p, 0] = 0.0
+                    hist[p, 1] = 0.0
+                    hist[p, 2] = 0.0
+                continue
+            r = math.sqrt(r2)
+            inv_r = 1.0 / r
+            nx = rx * inv_r
+            ny = ry * inv_r
+            nz = rz * inv_r
+            mj = mass[j]
+            m_eff = mi * mj / (mi + mj)
+            r_eff = ai * aj / (ai + aj)
+            # lever arms a_i r/(a_i + a_j) and a_j r/(a_i + a_j): they meet at one contact point and add up
+            # to the centre distance (Sun 2007 eq. 24 takes r/2 for equal spheres), so friction conserves
+            # angular momentum; the contact-point velocity (eq. 19) uses the same levers.
+            lever = r / cut
+            wx = (oxi + aj * omega[j, 0]) * lever
+            wy = (oyi + aj * omega[j, 1]) * lever
+            wz = (ozi + aj * omega[j, 2]) * lever
+            fn, ftx, fty, ftz, hx, hy, hz = contact_force(
+                _law(pp, si, species[j]), cut - r, nx, ny, nz,
+                vxi - vel[j, 0], vyi - vel[j, 1], vzi - vel[j, 2],
+                wx, wy, wz, m_eff, r_eff, dt, hist[p, 0], hist[p, 1], hist[p, 2], update)
+            hist[p, 0] = hx
+            hist[p, 1] = hy
+            hist[p, 2] = hz
+            fx = fn * nx + ftx
+            fy = fn * ny + fty
+            fz = fn * nz + ftz
+            # torque on i: (−ℓ_i n) × F_t = ℓ_i (−n × F_t); on j: (ℓ_j n) × (−F_t) = ℓ_j (−n × F_t),
+            # ℓ = a r/(a_i + a_j); gather_forces multiplies by a_i or a_j
+            cx = -(ny * ftz - nz * fty) * lever
+            cy = -(nz * ftx - nx * ftz) * lever
+            cz = -(nx * fty - ny * ftx) * lever
+            fxi += fx
+            fyi += fy
+            fzi += fz
+            cxi += cx
+            cyi += cy
+            czi += cz
+            sum_f[j, 0] -= fx
+            sum_f[j, 1] -= fy
+            sum_f[j, 2] -= fz
+            sum_c[j, 0] += cx
+            sum_c[j, 1] += cy
+            sum_c[j, 2] += cz
+        sum_f[i, 0] += fxi
+        sum_f[i, 1] += fyi
+        sum_f[i, 2] += fzi
+        sum_c[i, 0] += cxi
+        sum_c[i, 1] += cyi
+        sum_c[i, 2] += czi
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
-def pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
-                dt, update, sum_f, sum_c):
-    """Contact force sums (sum_f, N) and Σ −n × F_t (sum_c, torque per unit lever arm) per particle.
-
-    Slabs of one parity run in parallel: the pairs of slab s touch only slabs s and s + 1.
-    """
+def _pair_forces_parallel(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members,
+                          hist, dt, update, sum_f, sum_c):
     nslab = slab_start.shape[0] - 1
-    n = sum_f.shape[0]
-    for i in prange(n):
-        for d in range(3):
-            sum_f[i, d] = 0.0
-            sum_c[i, d] = 0.0
     for phase in range(2):
         for h in prange((nslab - phase + 1) // 2):
+            _slab_pairs(2 * h + phase, pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start,
+                        slab_members, hist, dt, update, sum_f, sum_c)
+
+
+@njit(cache=True, error_model="numpy")
+def pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
+                dt, update, sum_f, sum_c, parallel):
+    """Add the contact force sums (sum_f) and Σ −n × F_t (sum_c, torque per unit lever arm) per particle.
+
+    sum_f and sum_c must be zero on entry (gather_forces leaves them so). Slabs of one parity
+    run in parallel: the pairs of slab s touch only slabs s and s + 1. With one thread the
+    slabs run in the same order without a parallel region (``parallel`` False; bitwise the same sums).
+    """
+    if parallel:
+        _pair_forces_parallel(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start,
+                              slab_members, hist, dt, update, sum_f, sum_c)
+        return
+    nslab = slab_start.shape[0] - 1
+    for phase in range(2):
+        for h in range((nslab - phase + 1) // 2):
             _slab_pairs(2 * h + phase, pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start,
                         slab_members, hist, dt, update, sum_f, sum_c)
 
@@ -138,8 +198,22 @@ def walls_now(motion, point0, t):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def _wall_force(law, overlap, nx, ny, nz, vx, vy, vz, wx, wy, wz, m, a, dt, h0, h1, h2, update):
+    """(F (3), T (3), new history (3)) of a sphere (mass m, radius a) on a wall plane (unit normal n into
+    the particle side, overlap > 0); v: v_i − v_wall, w: a ω_i. Scalars only (see _law)."""
+    fn, ftx, fty, ftz, hx, hy, hz = contact_force(law, overlap, nx, ny, nz, vx, vy, vz, wx, wy, wz, m, a, dt,
+                                                  h0, h1, h2, update)
+    tqx = -a * (ny * ftz - nz * fty)
+    tqy = -a * (nz * ftx - nx * ftz)
+    tqz = -a * (nx * fty - ny * ftx)
+    return fn * nx + ftx, fn * ny + fty, fn * nz + ftz, tqx, tqy, tqz, hx, hy, hz
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def wall_contact(i, w, pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_hist, dt, update):
-    """(overlap, fx, fy, fz, tx, ty, tz) of particle i on wall w (a plane; infinite mass)."""
+    """(overlap, fx, fy, fz, tx, ty, tz) of particle i on wall w (a plane; infinite mass).
+
+    For analysis (``analysis.probes``); the stepping loop has the same code inline in _gather_range."""
     px, py, pz = wall_now[w, 0], wall_now[w, 1], wall_now[w, 2]
     wvx, wvy, wvz = wall_now[w, 3], wall_now[w, 4], wall_now[w, 5]
     nx, ny, nz = wall_normal[w, 0], wall_normal[w, 1], wall_normal[w, 2]
@@ -152,38 +226,27 @@ def wall_contact(i, w, pos, vel, omega, radius, mass, species, pw, wall_now, wal
             wall_hist[i, w, 2] = 0.0
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     a = radius[i]
-    fn, ftx, fty, ftz, hx, hy, hz = contact_force(
-        pw[species[i], w], overlap, nx, ny, nz,
-        vel[i, 0] - wvx, vel[i, 1] - wvy, vel[i, 2] - wvz,
+    fx, fy, fz, tqx, tqy, tqz, hx, hy, hz = _wall_force(
+        _law(pw, species[i], w), overlap, nx, ny, nz, vel[i, 0] - wvx, vel[i, 1] - wvy, vel[i, 2] - wvz,
         a * omega[i, 0], a * omega[i, 1], a * omega[i, 2], mass[i], a, dt,
         wall_hist[i, w, 0], wall_hist[i, w, 1], wall_hist[i, w, 2], update)
     if update:
         wall_hist[i, w, 0] = hx
         wall_hist[i, w, 1] = hy
         wall_hist[i, w, 2] = hz
-    tqx = -a * (ny * ftz - nz * fty)
-    tqy = -a * (nz * ftx - nx * ftz)
-    tqz = -a * (nx * fty - ny * ftx)
-    return overlap, fn * nx + ftx, fn * ny + fty, fn * nz + ftz, tqx, tqy, tqz
+    return overlap, fx, fy, fz, tqx, tqy, tqz
 
 
-@njit(cache=True, error_model="numpy", parallel=True)
-def gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
-                  wall_hist, gravity, ext_force, dim2, sum_f, sum_c, t, dt, force, torque, inv_mass, inv_inertia,
-                  mode, ref_pos, limit2):
-    """Total force and torque per particle: contact sums, walls, gravity, external force.
-
-    ``mode`` fuses the integrator into the same pass (one memory sweep per step):
-    0 forces only (wall history untouched); 1 forces + closing half kick; 2 forces + closing half kick +
-    the next step's half kick and drift. Returns how many particles moved more
-    than sqrt(limit2) from ``ref_pos`` (mode 2), else 0.
-    """
-    n = pos.shape[0]
+@njit(cache=True, error_model="numpy")
+def _gather_range(lo, hi, pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_hist, wall_touch,
+                  gravity, ext_force, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos,
+                  limit2):
+    """gather_forces for particles lo..hi−1 (serial code; the parallel driver splits the range)."""
     half = 0.5 * dt
     moved = 0
     nw = wall_normal.shape[0]
-    wall_now = walls_now(wall_motion, wall_point0, t)
-    for i in prange(n):
+    update = mode > 0
+    for i in range(lo, hi):
         fx = mass[i] * gravity[0] + ext_force[i, 0]
         fy = mass[i] * gravity[1] + ext_force[i, 1]
         fz = mass[i] * gravity[2] + ext_force[i, 2]
@@ -193,20 +256,53 @@ def gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_
         cx = sum_c[i, 0]
         cy = sum_c[i, 1]
         cz = sum_c[i, 2]
+        # leave the sums zero for the next pair_forces (saves a separate clearing pass)
+        sum_f[i, 0] = 0.0
+        sum_f[i, 1] = 0.0
+        sum_f[i, 2] = 0.0
+        sum_c[i, 0] = 0.0
+        sum_c[i, 1] = 0.0
+        sum_c[i, 2] = 0.0
         a = radius[i]
         tx = a * cx
         ty = a * cy
         tz = a * cz
+        # walls: wall_contact written out (an inlined helper taking arrays made Numba copy array
+        # references: an atomic reference-count increment and decrement per particle and wall)
+        xi = pos[i, 0]
+        yi = pos[i, 1]
+        zi = pos[i, 2]
         for w in range(nw):
-            ov, wfx, wfy, wfz, wtx, wty, wtz = wall_contact(
-                i, w, pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_hist, dt, mode > 0)
-            if ov > 0.0:
-                fx += wfx
-                fy += wfy
-                fz += wfz
-                tx += wtx
-                ty += wty
-                tz += wtz
+            nx = wall_normal[w, 0]
+            ny = wall_normal[w, 1]
+            nz = wall_normal[w, 2]
+            gap = (xi - wall_now[w, 0]) * nx + (yi - wall_now[w, 1]) * ny + (zi - wall_now[w, 2]) * nz
+            overlap = a - gap
+            if overlap <= 0.0:
+                # the spring of a wall contact that ended is reset; wall_touch[i, w] False means it is zero
+                # already, which spares reading wall_hist (N × W × 3) for every particle and wall each step
+                if update and wall_touch[i, w]:
+                    wall_hist[i, w, 0] = 0.0
+                    wall_hist[i, w, 1] = 0.0
+                    wall_hist[i, w, 2] = 0.0
+                    wall_touch[i, w] = False
+                continue
+            wfx, wfy, wfz, wtx, wty, wtz, hx, hy, hz = _wall_force(
+                _law(pw, species[i], w), overlap, nx, ny, nz,
+                vel[i, 0] - wall_now[w, 3], vel[i, 1] - wall_now[w, 4], vel[i, 2] - wall_now[w, 5],
+                a * omega[i, 0], a * omega[i, 1], a * omega[i, 2], mass[i], a, dt,
+                wall_hist[i, w, 0], wall_hist[i, w, 1], wall_hist[i, w, 2], update)
+            if update:
+                wall_hist[i, w, 0] = hx
+                wall_hist[i, w, 1] = hy
+                wall_hist[i, w, 2] = hz
+                wall_touch[i, w] = True
+            fx += wfx
+            fy += wfy
+            fz += wfz
+            tx += wtx
+            ty += wty
+            tz += wtz
         if dim2:
             fz = 0.0
             tx = 0.0
@@ -234,13 +330,65 @@ def gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_
     return moved
 
 
+@njit(cache=True, error_model="numpy")
+def touching_walls(wall_hist):
+    """(N, W) bool: where the wall spring wall_hist[i, w] is not zero (derived, not state)."""
+    n, nw = wall_hist.shape[0], wall_hist.shape[1]
+    out = np.zeros((n, nw), dtype=np.bool_)
+    for i in range(n):
+        for w in range(nw):
+            out[i, w] = (wall_hist[i, w, 0] != 0.0) | (wall_hist[i, w, 1] != 0.0) | (wall_hist[i, w, 2] != 0.0)
+    return out
+
+
+GATHER_CHUNK = 512  # particles per parallel work item of gather_forces
+
+
 @njit(cache=True, error_model="numpy", parallel=True)
+def _gather_parallel(pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_hist, wall_touch,
+                     gravity, ext_force, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos,
+                     limit2):
+    n = pos.shape[0]
+    nchunk = (n + GATHER_CHUNK - 1) // GATHER_CHUNK
+    moved = 0
+    for c in prange(nchunk):
+        moved += _gather_range(c * GATHER_CHUNK, min(n, (c + 1) * GATHER_CHUNK), pos, vel, omega, radius, mass,
+                               species, pw, wall_now, wall_normal, wall_hist, wall_touch, gravity, ext_force, dim2, sum_f,
+                               sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2)
+    return moved
+
+
+@njit(cache=True, error_model="numpy")
+def gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
+                  wall_hist, wall_touch, gravity, ext_force, dim2, sum_f, sum_c, t, dt, force, torque, inv_mass, inv_inertia,
+                  mode, ref_pos, limit2, parallel):
+    """Total force and torque per particle: contact sums, walls, gravity, external force.
+
+    ``mode`` fuses the integrator into the same pass (one memory sweep per step):
+    0 forces only (wall history untouched); 1 forces + closing half kick; 2 forces + closing half kick +
+    the next step's half kick and drift. Returns how many particles moved more
+    than sqrt(limit2) from ``ref_pos`` (mode 2), else 0. Leaves sum_f and sum_c zero.
+    ``wall_touch`` (N, W) bool: False where wall_hist[i, w] is zero (see touching_walls); kept so.
+    Each particle's arithmetic is the same on any number of threads (``parallel`` False: no parallel region).
+    """
+    wall_now = walls_now(wall_motion, wall_point0, t)
+    n = pos.shape[0]
+    if parallel and n > GATHER_CHUNK:
+        return _gather_parallel(pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_hist,
+                                wall_touch, gravity, ext_force, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia,
+                                mode, ref_pos, limit2)
+    return _gather_range(0, n, pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_hist,
+                         wall_touch, gravity, ext_force, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode,
+                         ref_pos, limit2)
+
+
+@njit(cache=True, error_model="numpy")
 def _kick_drift(pos, vel, omega, force, torque, inv_mass, inv_inertia, dt, ref_pos, limit2):
     """Half kick then drift; returns how many particles moved more than sqrt(limit2) since the last build."""
     n = pos.shape[0]
     half = 0.5 * dt
     moved = 0
-    for i in prange(n):
+    for i in range(n):
         d2 = 0.0
         for d in range(3):
             vel[i, d] += half * force[i, d] * inv_mass[i]
@@ -265,20 +413,20 @@ def rebuild(pos, radius, skin, dim2, row_start, partner, hist, ref_pos):
 @njit(cache=True, error_model="numpy")
 def compute_forces(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, wall_point0, wall_normal,
                    wall_hist, gravity, ext_force, dim2, row_start, partner, hist, slab_start, slab_members,
-                   t, dt, update, force, torque):
+                   t, dt, update, force, torque, parallel):
     """Forces and torques at the current state (no integration; history updated only if ``update``)."""
     sum_f = np.zeros_like(force)
     sum_c = np.zeros_like(force)
     pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
-                dt, update, sum_f, sum_c)
+                dt, update, sum_f, sum_c, parallel)
     gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal, wall_hist,
-                  gravity, ext_force, dim2, sum_f, sum_c, t, dt, force, torque, mass, mass, 0, pos, 0.0)
+                  touching_walls(wall_hist), gravity, ext_force, dim2, sum_f, sum_c, t, dt, force, torque, mass, mass, 0, pos, 0.0, parallel)
 
 
 @njit(cache=True, error_model="numpy")
 def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia, species, pp, pw,
             wall_motion, wall_point0, wall_normal, wall_hist, gravity, ext_force, dim2,
-            row_start, partner, hist, slab_start, slab_members, ref_pos, skin, step0, dt, nsteps):
+            row_start, partner, hist, slab_start, slab_members, ref_pos, skin, step0, dt, nsteps, parallel):
     """Run ``nsteps`` velocity-Verlet DEM steps from step ``step0`` (time step0 * dt).
 
     Order of one step::
@@ -293,6 +441,7 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
     next are fused into the force-gathering pass; results are bitwise those of the
     separate passes, so chunking a run differently does not change it.
     The list arrays change size on rebuild, so they are returned with the rebuild count.
+    ``parallel`` (more than one thread) selects the parallel force loops; the sums are the same.
     """
     limit2 = (0.5 * skin) ** 2
     sum_f = np.zeros_like(force)
@@ -300,6 +449,7 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
     rebuilds = 0
     if nsteps <= 0:
         return row_start, partner, hist, slab_start, slab_members, rebuilds
+    wall_touch = touching_walls(wall_hist)
     moved = _kick_drift(pos, vel, omega, force, torque, inv_mass, inv_inertia, dt, ref_pos, limit2)
     for s in range(nsteps):
         t = (step0 + s + 1) * dt
@@ -308,9 +458,9 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
                 pos, radius, skin, dim2, row_start, partner, hist, ref_pos)
             rebuilds += 1
         pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
-                    dt, True, sum_f, sum_c)
+                    dt, True, sum_f, sum_c, parallel)
         mode = 2 if s < nsteps - 1 else 1
         moved = gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
-                              wall_hist, gravity, ext_force, dim2, sum_f, sum_c, t, dt, force, torque, inv_mass,
-                              inv_inertia, mode, ref_pos, limit2)
+                              wall_hist, wall_touch, gravity, ext_force, dim2, sum_f, sum_c, t, dt, force, torque, inv_mass,
+                              inv_inertia, mode, ref_pos, limit2, parallel)
     return row_start, partner, hist, slab_start, slab_members, rebuilds

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 
 from ..errors import CaseError
@@ -151,7 +152,8 @@ class SoftSphereEngine:
         K.compute_forces(st.position, st.velocity, st.omega, st.radius, st.mass, st.species, self.pp, self.pw,
                          self.wall_motion, self.wall_point0, self.wall_normal, self.wall_hist, self.gravity,
                          self.ext_force, self.dim2, self.row_start, self.partner, self.hist, self.slab_start,
-                         self.slab_members, self.time, self.dt, update, st.force, st.torque)
+                         self.slab_members, self.time, self.dt, update, st.force, st.torque,
+                         numba.get_num_threads() > 1)
 
     def advance(self, nsteps: int) -> None:
         """Run ``nsteps`` DEM steps of ``self.dt`` in one compiled call."""
@@ -162,7 +164,8 @@ class SoftSphereEngine:
             st.position, st.velocity, st.omega, st.force, st.torque, st.radius, st.mass, self.inv_mass,
             self.inv_inertia, st.species, self.pp, self.pw, self.wall_motion, self.wall_point0, self.wall_normal,
             self.wall_hist, self.gravity, self.ext_force, self.dim2, self.row_start, self.partner, self.hist,
-            self.slab_start, self.slab_members, self.ref_pos, self.skin, self.steps, self.dt, nsteps)
+            self.slab_start, self.slab_members, self.ref_pos, self.skin, self.steps, self.dt, nsteps,
+            numba.get_num_threads() > 1)
         self.steps += nsteps
         self.time = self.steps * self.dt
         self.rebuilds += nreb

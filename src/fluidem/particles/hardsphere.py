@@ -90,6 +90,7 @@ class HardSphereEngine:
         self.ref_pos = st.position.copy()
         self.nbr_start, self.nbr = K.build_neighbours(st.position, st.radius, self.skin, self.dim2)
         self.event_log = np.zeros((0, 5))  # see record_collisions()
+        self._work = None  # the kernel's work arrays (K.workspace), made at the first step
         # what analysis/probes.py reads from a particle engine: no lasting contacts between hard spheres
         self.row_start = np.zeros(st.n + 1, np.int64)
         self.partner = np.zeros(0, np.int32)
@@ -166,8 +167,7 @@ class HardSphereEngine:
     def _update_force(self) -> None:
         """state.force = m g + ext_force (the finite forces of eq. 34); no torques between collisions."""
         st = self.state
-        st.force[...] = st.mass[:, None] * self.gravity[None, :] + self.ext_force
-        st.torque[...] = 0.0
+        K.set_forces(st.mass, self.gravity, self.ext_force, st.force, st.torque)
 
     def advance(self, nsteps: int) -> None:
         """Run ``nsteps`` force steps of ``self.dt`` in one compiled call."""
@@ -178,15 +178,18 @@ class HardSphereEngine:
             self.steps += nsteps
             self.time = self.steps * self.dt
             return
-        saved = self._copy()
+        counters, energy = self.counters.copy(), self.energy.copy()
         info = np.zeros(3)
-        self.nbr_start, self.nbr, status = K.advance(
+        if self._work is None or self._work[0].shape[0] != K.P_ROW * st.n:
+            self._work = K.workspace(st.n)
+        nbr_start, nbr, status = K.advance(
             st.position, st.velocity, st.omega, st.radius, self.inv_mass, self.inv_inertia, st.species, self.pp,
             self.pw, self.wall_point0, self.wall_normal, self.gravity, self.ext_force, self.dim2, self.nbr_start,
             self.nbr, self.ref_pos, self.skin, self.last_collision, self.steps, self.dt, nsteps,
-            self.max_events_per_step, self.counters, self.energy, self.event_log, info)
-        if status != K.OK:
-            self._paste(saved)
+            self.max_events_per_step, self.counters, self.energy, self.event_log, info, self._work)
+        if status != K.OK:  # the kernel left the particle arrays as they were
+            self.counters[...] = counters
+            self.energy[...] = energy
             step = self.steps + int(info[0])
             tc = self.pp[0, 0, K.SLOT_COLLAPSE_TIME]
             raise CollisionCascadeError(
@@ -199,22 +202,10 @@ class HardSphereEngine:
                    f"stay elastic under it; try collapse_time = 0. ")
                 + f"A box width that is not a whole number of diameters, a size distribution or a smaller "
                   f"time.dt also help. The particles are left as they were at t = {self.time:.6g} s")
+        self.nbr_start, self.nbr = nbr_start, nbr
         self.steps += nsteps
         self.time = self.steps * self.dt
         self._update_force()
-
-    _SAVED = ("ref_pos", "last_collision", "counters", "energy", "nbr_start", "nbr")
-
-    def _copy(self) -> dict:
-        out = {k: v.copy() for k, v in self.state.arrays().items() if k in ("position", "velocity", "omega")}
-        out.update({k: getattr(self, k).copy() for k in self._SAVED})
-        return out
-
-    def _paste(self, saved: dict) -> None:
-        for k in ("position", "velocity", "omega"):
-            getattr(self.state, k)[...] = saved[k]
-        for k in self._SAVED:
-            setattr(self, k, saved[k])
 
     # ------------------------------------------------------------ counters and energies
     @property

@@ -130,6 +130,24 @@ def _gradient_at(p, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, ci0, ci1, cw0, cw1, 
     return gx, gy
 
 
+@njit(cache=True, inline="always")
+def _scatter(A, B, i0, i1, a0, a1, j0, j1, b0, b1, k, vel):
+    """A[i, j] += a_i b_j k and B[i, j] += a_i b_j k vel over the two nodes of each axis (no branches:
+    an inlined helper with array arguments and branches costs Numba reference counting)."""
+    w = a0 * b0 * k
+    A[i0, j0] += w
+    B[i0, j0] += w * vel
+    w = a0 * b1 * k
+    A[i0, j1] += w
+    B[i0, j1] += w * vel
+    w = a1 * b0 * k
+    A[i1, j0] += w
+    B[i1, j0] += w * vel
+    w = a1 * b1 * k
+    A[i1, j1] += w
+    B[i1, j1] += w * vel
+
+
 @njit(cache=True, error_model="numpy")
 def deposit(code, position, velocity, radius, volume, u, v, voidage, rho, mu, dx, dy, min_voidage, px, py, kp,
             AU, BU, AV, BV):
@@ -174,30 +192,8 @@ def deposit(code, position, velocity, radius, volume, u, v, voidage, rho, mu, dx
             continue
         k = beta_per_solids(code, eps, slip, d, rg, mu, 1.0) * volume[q]  # β V_p/(1 − ε), Sun eq. 29
         kp[q] = k
-        w = fw0 * cv0 * k
-        AU[fi0, cj0] += w
-        BU[fi0, cj0] += w * vx
-        w = fw0 * cv1 * k
-        AU[fi0, cj1] += w
-        BU[fi0, cj1] += w * vx
-        w = fw1 * cv0 * k
-        AU[fi1, cj0] += w
-        BU[fi1, cj0] += w * vx
-        w = fw1 * cv1 * k
-        AU[fi1, cj1] += w
-        BU[fi1, cj1] += w * vx
-        w = cw0 * fv0 * k
-        AV[ci0, fj0] += w
-        BV[ci0, fj0] += w * vy
-        w = cw0 * fv1 * k
-        AV[ci0, fj1] += w
-        BV[ci0, fj1] += w * vy
-        w = cw1 * fv0 * k
-        AV[ci1, fj0] += w
-        BV[ci1, fj0] += w * vy
-        w = cw1 * fv1 * k
-        AV[ci1, fj1] += w
-        BV[ci1, fj1] += w * vy
+        _scatter(AU, BU, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, k, vx)
+        _scatter(AV, BV, ci0, ci1, cw0, cw1, fj0, fj1, fv0, fv1, k, vy)
     return bad
 
 

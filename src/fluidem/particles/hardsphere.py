@@ -17,8 +17,7 @@ from ..state import ParticleState
 from . import _hardsphere_kernels as K
 from .contact.base import N_SLOTS
 from .contact.hard_sphere import HardSphere
-from .placement import place
-from .softsphere import SoftSphereEngine
+from .softsphere import SoftSphereEngine, set_up_particles
 from .walls import build_walls
 
 DEFAULT_DT = 1e-4  # s, Hoomans 1996 DT (Table 2, §5.1)
@@ -65,16 +64,7 @@ class HardSphereEngine:
                 raise CaseError(
                     f"walls: wall {plane.source.name!r} moves ({plane.source.motion.kind}); the hard-sphere engine "
                     f"supports static walls only; remove its motion or use a soft-sphere contact model")
-        if state is None:
-            pos, vel, diam, spec = place(case, self.walls)
-            dens = np.array([s.density for s in case.particles.species])
-            state = ParticleState.create(pos, vel, diam, spec, dens)
-        self.state = state
-        st = state
-        self.inv_mass = 1.0 / st.mass
-        self.inv_inertia = 1.0 / st.inertia
-        self.gravity = np.array(case.gravity, float)
-        self.ext_force = np.zeros_like(st.position)
+        st = set_up_particles(self, case, state)
         self.pp, self.pw = self._contact_tables()
         self.dt = case.time.dt if case.time.dt is not None else DEFAULT_DT
         dmax = 2.0 * float(st.radius.max()) if st.n else 0.0

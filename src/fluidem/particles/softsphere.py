@@ -22,6 +22,23 @@ from .walls import build_walls
 STABILITY_FRACTION = 0.1  # dt must stay below t_c / 10: at least ten steps per contact
 
 
+
+def set_up_particles(engine, case, state: ParticleState | None) -> ParticleState:
+    """The particle part of an engine's set-up, shared by the soft- and hard-sphere engines: the state
+    (``state``, or placed by the case inside ``engine.walls``), inverse mass and inertia, gravity and a
+    zero external force on ``engine``. Returns the state."""
+    if state is None:
+        pos, vel, diam, spec = place(case, engine.walls)
+        dens = np.array([s.density for s in case.particles.species])
+        state = ParticleState.create(pos, vel, diam, spec, dens)
+    engine.state = state
+    engine.inv_mass = 1.0 / state.mass
+    engine.inv_inertia = 1.0 / state.inertia
+    engine.gravity = np.array(case.gravity, float)
+    engine.ext_force = np.zeros_like(state.position)
+    return state
+
+
 class SoftSphereEngine:
     """Velocity-Verlet soft-sphere DEM with cell + Verlet lists (Sun 2007 eqs 15–26)."""
 
@@ -29,16 +46,7 @@ class SoftSphereEngine:
         self.case = case
         self.dim2 = case.particles.dimensions == 2
         self.walls = build_walls(case)
-        if state is None:
-            pos, vel, diam, spec = place(case, self.walls)
-            dens = np.array([s.density for s in case.particles.species])
-            state = ParticleState.create(pos, vel, diam, spec, dens)
-        self.state = state
-        st = state
-        self.inv_mass = 1.0 / st.mass
-        self.inv_inertia = 1.0 / st.inertia
-        self.gravity = np.array(case.gravity, float)
-        self.ext_force = np.zeros_like(st.position)
+        st = set_up_particles(self, case, state)
         self.pp, self.pw, self.contact_times = self._contact_tables()
         self.wall_point0, self.wall_normal, self.wall_motion = self.walls.arrays()
         self.wall_hist = np.zeros((st.n, len(self.walls.planes), 3))

@@ -404,7 +404,7 @@ def _kick_drift(pos, vel, omega, force, torque, inv_mass, inv_inertia, dt, ref_p
 @njit(cache=True, error_model="numpy")
 def rebuild(pos, radius, skin, dim2, row_start, partner, hist, ref_pos):
     """New Verlet list around the current positions, history carried over."""
-    new_start, new_partner, slab_start, slab_members = build_pairs(pos, radius, skin, dim2)
+    new_start, new_partner, slab_start, slab_members = build_pairs(pos, radius, skin, dim2, partner.shape[0])
     new_hist = carry_history(row_start, partner, hist, new_start, new_partner)
     ref_pos[:, :] = pos
     return new_start, new_partner, new_hist, slab_start, slab_members

@@ -150,13 +150,16 @@ def _scatter(A, B, i0, i1, a0, a1, j0, j1, b0, b1, k, vel):
 
 @njit(cache=True, error_model="numpy")
 def deposit(code, position, velocity, radius, volume, u, v, voidage, rho, mu, dx, dy, min_voidage, px, py, kp,
-            AU, BU, AV, BV):
+            AU, BU, AV, BV, KC, vol, beta_u, su, beta_v, sv):
     """K_p and the face sums of the ``particle`` mode (module docstring); returns the number of
     particles whose drag arguments are out of range (their K_p is NaN, nothing deposited).
 
     position, velocity : (N, 3); radius, volume, kp : (N,); u, AU, BU : (nx + 1, ny);
     v, AV, BV : (nx, ny + 1); voidage (ε at the end of the gas step, clipped to
-    [min_voidage, 1] at the particle), rho : (nx, ny). A*, B* are overwritten.
+    [min_voidage, 1] at the particle), rho, KC : (nx, ny). A*, B* are overwritten; KC[i, j] becomes
+    Σ K_p over the particles whose centre lies in cell (i, j) (for output: Sun 2007 eq. 33's cell β
+    times V_cell). What the gas takes (vol = V_cell): beta_u = AU / vol, su = BU / AU (0 where AU = 0),
+    and the same on the y-faces.
     """
     nx, ny = voidage.shape
     idx, idy = 1.0 / dx, 1.0 / dy
@@ -164,11 +167,14 @@ def deposit(code, position, velocity, radius, volume, u, v, voidage, rho, mu, dx
     BU[:, :] = 0.0
     AV[:, :] = 0.0
     BV[:, :] = 0.0
+    KC[:, :] = 0.0
     three = velocity.shape[1] > 2
     bad = 0
     for q in range(position.shape[0]):
         x = position[q, 0]
         y = position[q, 1]
+        ic = min(max(int(x / dx), 0), nx - 1)
+        jc = min(max(int(y / dy), 0), ny - 1)
         ci0, ci1, cw0, cw1 = _centre_axis(x, idx, nx, px)
         fi0, fi1, fw0, fw1 = _face_axis(x, idx, nx, px)
         cj0, cj1, cv0, cv1 = _centre_axis(y, idy, ny, py)
@@ -192,9 +198,22 @@ def deposit(code, position, velocity, radius, volume, u, v, voidage, rho, mu, dx
             continue
         k = beta_per_solids(code, eps, slip, d, rg, mu, 1.0) * volume[q]  # β V_p/(1 − ε), Sun eq. 29
         kp[q] = k
+        KC[ic, jc] += k
         _scatter(AU, BU, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, k, vx)
         _scatter(AV, BV, ci0, ci1, cw0, cw1, fj0, fj1, fv0, fv1, k, vy)
+    _face_coefficients(AU, BU, vol, beta_u, su)
+    _face_coefficients(AV, BV, vol, beta_v, sv)
     return bad
+
+
+@njit(cache=True, error_model="numpy")
+def _face_coefficients(A, B, vol, beta, solids):
+    """beta = A / vol, solids = B / A (0 where A = 0): the face β and u_s the gas takes."""
+    for i in range(A.shape[0]):
+        for j in range(A.shape[1]):
+            a = A[i, j]
+            beta[i, j] = a / vol
+            solids[i, j] = B[i, j] / a if a > 0.0 else 0.0
 
 
 @njit(cache=True, error_model="numpy")

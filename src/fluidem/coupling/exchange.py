@@ -85,6 +85,10 @@ class GasCoupling:
         gd = self.grid
         self._faces = tuple(np.zeros(gd.u_shape) for _ in range(2)) + tuple(np.zeros(gd.v_shape) for _ in range(2))
         self._kp = np.zeros(st.radius.shape)  # K_p of the "particle" exchange [kg/s]
+        self._kp_cells = np.zeros(self.grid.shape)  # Σ K_p per cell of the last deposit [kg/s]
+        # face β and u_s of the "particle" exchange, (x faces, y faces) each
+        self._face_beta = (np.zeros(gd.u_shape), np.zeros(gd.v_shape))
+        self._face_solids = (np.zeros(gd.u_shape), np.zeros(gd.v_shape))
         self._cell_inputs = None  # β, v_s,x, v_s,y per cell of the "cell" exchange
         self._paired_ready = False  # K_p / cell inputs of a gas step at hand (else forces as "cell_beta")
         xc, yc = I._axes(self.grid, "centre")[:2]
@@ -172,7 +176,11 @@ class GasCoupling:
                 raise ValueError(f"gas state {k}: expected {shape} float64, got {a.shape} {a.dtype}")
 
     def gas_step(self) -> None:
-        """Steps 1-4 of the module docstring: map, the gas's β, advance the gas by DT, the particle forces."""
+        """Steps 1-4 of the module docstring: map, the gas's β, advance the gas by DT, the particle forces.
+
+        ``last_beta`` of the "particle" exchange is Σ_{p in cell} K_p / V_cell (as Sun 2007 eq. 33 sums
+        it; the cell of a particle is floor(x/dx), clipped), for output; the gas itself took the face values."""
+        gd = self.grid
         smap = self._map()
         self.clipped = smap.clipped
         t = self.gas_steps * self.gas_dt
@@ -189,7 +197,7 @@ class GasCoupling:
                 beta, us, vs = cb, smap.solids_u, smap.solids_v
         self.last_map = smap
         self.last_face_beta = beta if isinstance(beta, tuple) else None
-        self.last_beta = self._cell_beta_of_kp() if self.exchange == "particle" else self._cell_inputs[0]
+        self.last_beta = self._kp_cells / gd.cell_volume if self.exchange == "particle" else self._cell_inputs[0]
         self.last_info = self.solver.advance(self.state, self.gas_dt, t, voidage=smap.voidage, beta=beta,
                                              solids_u=us, solids_v=vs)
         self.gas_steps += 1
@@ -205,23 +213,12 @@ class GasCoupling:
         au, bu_, av, bv_ = self._faces
         bad = P.deposit(self.drag.code, st.position, st.velocity, st.radius, self.volume, gs.u, gs.v, voidage,
                         gs.rho, self.solver.props.viscosity, gd.dx, gd.dy, self.mapping.minimum_voidage,
-                        *self._periodic, self._kp, au, bu_, av, bv_)
+                        *self._periodic, self._kp, au, bu_, av, bv_, self._kp_cells, gd.cell_volume,
+                        self._face_beta[0], self._face_solids[0], self._face_beta[1], self._face_solids[1])
         if bad:
             raise ValueError(f"particle drag: arguments out of range for {bad} particles "
                              "(voidage must lie in (0, 1], gas density > 0)")
-        vol = gd.cell_volume
-        us = np.divide(bu_, au, out=np.zeros_like(au), where=au > 0.0)
-        vs = np.divide(bv_, av, out=np.zeros_like(av), where=av > 0.0)
-        return (au / vol, av / vol), us, vs
-
-    def _cell_beta_of_kp(self) -> np.ndarray:
-        """β per cell [kg m^-3 s^-1] of the "particle" exchange: Σ_{p in cell} K_p / V_cell (as Sun 2007
-        eq. 33 sums it), for output; the gas itself took the face values."""
-        gd, pos = self.grid, self.engine.state.position
-        i = np.clip((pos[:, 0] / gd.dx).astype(np.int64), 0, gd.nx - 1)
-        j = np.clip((pos[:, 1] / gd.dy).astype(np.int64), 0, gd.ny - 1)
-        out = np.bincount(i * gd.ny + j, weights=self._kp, minlength=gd.nx * gd.ny)
-        return out.reshape(gd.shape) / gd.cell_volume
+        return self._face_beta, self._face_solids[0], self._face_solids[1]
 
     def set_particle_forces(self) -> None:
         """ext_force ← the gas force; the engine's stored total force (used by the next half kick) follows.

@@ -216,7 +216,7 @@ def impulse(nx, ny, nz, ux, uy, uz, inv_ma, inv_mb, ka, kb, e, mu):
 
 # ---------------------------------------------------------------- packed per-particle records
 def workspace(n):
-    """The work arrays of ``advance`` for n particles, (P, Q, R, ev, ev_time, ncoll, T, X). The engine keeps them
+    """The work arrays of ``advance`` for n particles, (P, Q, R, ev, ev_time, ncoll, T, X, F). The engine keeps them
     between calls: fresh ones would be fresh pages of memory, and their page faults cost more than a
     step of a small bed. P's rows start on 64-byte boundaries (one cache line each)."""
     L = 1
@@ -226,7 +226,7 @@ def workspace(n):
     off = (-buf.ctypes.data % 64) // 8
     P = buf[off:off + P_ROW * n]
     return (P, np.empty((n, 8)), np.empty(R_ROW * n), np.empty((n, 2), np.int64), np.empty(n), np.empty(n, np.int64),
-            np.empty(4 * L), np.empty((n, 3)))
+            np.empty(4 * L), np.empty((n, 3)), np.empty(n))
 
 
 @njit(cache=True, error_model="numpy")
@@ -447,28 +447,11 @@ def _scan_planar(t, xi, yi, vxi, vyi, ri, best, partf, P, p0, p1, nbr, sync):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
-def _predict(i, t, t_end, P, nbr_start, nbr, walls, R, half_skin, ncoll, ev, planar, sync):
-    """Earliest event of particle i (uint32) after time t and before t_end (else none): stores (partner, its
-    collision counter) in ev[i] and returns the time (inf for none). ``planar``: see ``_load``; ``sync``
-    (a constant): every particle's clock is t."""
-    o = P_ROW * i
-    vxi = P[o + P_VX]
-    vyi = P[o + P_VY]
-    vzi = P[o + P_VZ]
-    if sync:
-        xi = P[o + P_X]
-        yi = P[o + P_Y]
-        zi = P[o + P_Z]
-    else:
-        dti = t - P[o + P_T]
-        xi = P[o + P_X] + vxi * dti  # eq. 32 up to time t
-        yi = P[o + P_Y] + vyi * dti
-        zi = P[o + P_Z] + vzi * dti
-    ri = P[o + P_R]
-    best = t_end
-    partf = float(NO_EVENT)
-    # wall planes: Hoomans eq. 31 for any plane, gap h = (x − p)·n − R closed at speed −v·n. Only for a
-    # particle near a wall: the others leave their skin sphere (an earlier event) before they can touch one.
+def _wall_event(i, t, xi, yi, zi, vxi, vyi, vzi, ri, best, partf, walls, R):
+    """Earliest wall collision of particle i (Hoomans eq. 31) before ``best``: (best, code as a float).
+
+    Any plane, gap h = (x − p)·n − R closed at speed −v·n. Only for a particle near a wall: the others
+    leave their skin sphere (an earlier event) before they can touch one."""
     if R[R_ROW * i + R_NEAR] != 0.0:
         for w in range(walls.shape[0]):
             nx = walls[w, W_NX]
@@ -481,16 +464,15 @@ def _predict(i, t, t_end, P, nbr_start, nbr, walls, R, half_skin, ncoll, ev, pla
                 if tw < best:
                     best = tw
                     partf = walls[w, W_CODE]
-    # neighbours: Hoomans eq. 30
-    if planar:
-        best, partf = _scan_planar(t, xi, yi, vxi, vyi, ri, best, partf, P, nbr_start[i], nbr_start[i + 1], nbr,
-                                   sync)
-    else:
-        best, partf = _scan(t, xi, yi, zi, vxi, vyi, vzi, ri, best, partf, P, nbr_start[i], nbr_start[i + 1], nbr,
-                            sync)
+    return best, partf
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def _finish_event(i, t, xi, yi, zi, vxi, vyi, vzi, best, partf, R, half_skin, ncoll, ev):
+    """The skin event (leaving the skin sphere |x − x_ref| = skin/2 invalidates the neighbour list) if it
+    comes before ``best``; stores (partner, its collision counter) in ev[i]; returns the time (inf: none)."""
     part = int(partf)
     cnt = ncoll[part] if part >= 0 else 0
-    # leaving the skin sphere |x − x_ref| = skin/2 invalidates the neighbour list
     dx = xi - R[R_ROW * i + R_X]
     dy = yi - R[R_ROW * i + R_Y]
     dz = zi - R[R_ROW * i + R_Z]
@@ -515,11 +497,101 @@ def _predict(i, t, t_end, P, nbr_start, nbr, walls, R, half_skin, ncoll, ev, pla
     return best
 
 
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def _predict(i, t, t_end, P, nbr_start, nbr, walls, R, half_skin, ncoll, ev, planar, sync):
+    """Earliest event of particle i (uint32) after time t and before t_end (else none): stores (partner, its
+    collision counter) in ev[i] and returns the time (inf for none). ``planar``: see ``_load``; ``sync``
+    (a constant): every particle's clock is t."""
+    o = P_ROW * i
+    vxi = P[o + P_VX]
+    vyi = P[o + P_VY]
+    vzi = P[o + P_VZ]
+    if sync:
+        xi = P[o + P_X]
+        yi = P[o + P_Y]
+        zi = P[o + P_Z]
+    else:
+        dti = t - P[o + P_T]
+        xi = P[o + P_X] + vxi * dti  # eq. 32 up to time t
+        yi = P[o + P_Y] + vyi * dti
+        zi = P[o + P_Z] + vzi * dti
+    ri = P[o + P_R]
+    best, partf = _wall_event(i, t, xi, yi, zi, vxi, vyi, vzi, ri, t_end, float(NO_EVENT), walls, R)
+    # neighbours: Hoomans eq. 30
+    if planar:
+        best, partf = _scan_planar(t, xi, yi, vxi, vyi, ri, best, partf, P, nbr_start[i], nbr_start[i + 1], nbr,
+                                   sync)
+    else:
+        best, partf = _scan(t, xi, yi, zi, vxi, vyi, vzi, ri, best, partf, P, nbr_start[i], nbr_start[i + 1], nbr,
+                            sync)
+    return _finish_event(i, t, xi, yi, zi, vxi, vyi, vzi, best, partf, R, half_skin, ncoll, ev)
+
+
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _predict_all(t, t_end, P, nbr_start, nbr, walls, R, half_skin, ncoll, ev, ev_time, T, L, planar):
-    """Events of all particles, all with their clocks at t (the start of a step or a list rebuild)."""
-    for i in range(ev_time.shape[0]):
-        ev_time[i] = _predict(np.uint32(i), t, t_end, P, nbr_start, nbr, walls, R, half_skin, ncoll, ev, planar, True)
+def _predict_all(t, t_end, P, nbr_start, nbr, walls, R, half_skin, ncoll, ev, ev_time, T, L, planar, partf):
+    """Events of all particles, all with their clocks at t (the start of a step or a list rebuild).
+
+    Each pair of the (full, symmetric) list is solved once, from its lower index, and offered to both
+    particles: eq. 30 gives the same time for (i, j) and (j, i) (r and v only change sign). The pruning
+    bound of ``_scan`` is the step's end here, as the partner's best is not known yet. ``partf`` (N,): scratch.
+    Equal times go to the first offer: walls, then the partners in the order the pairs are met."""
+    n = ev_time.shape[0]
+    for i in range(n):
+        o = P_ROW * i
+        best, pf = _wall_event(i, t, P[o + P_X], P[o + P_Y], P[o + P_Z], P[o + P_VX], P[o + P_VY], P[o + P_VZ],
+                               P[o + P_R], t_end, float(NO_EVENT), walls, R)
+        ev_time[i] = best
+        partf[i] = pf
+    for i in range(n):
+        o = P_ROW * i
+        xi = P[o + P_X]
+        yi = P[o + P_Y]
+        zi = P[o + P_Z]
+        vxi = P[o + P_VX]
+        vyi = P[o + P_VY]
+        vzi = P[o + P_VZ]
+        ri = P[o + P_R]
+        best = ev_time[i]
+        pf = partf[i]
+        fi = float(i)
+        span = t_end - t
+        for p in range(nbr_start[i], nbr_start[i + 1]):
+            j = nbr[p]
+            if j < i:  # met from j's row
+                continue
+            q = P_ROW * j
+            vx = vxi - P[q + P_VX]
+            vy = vyi - P[q + P_VY]
+            rx = xi - P[q + P_X]
+            ry = yi - P[q + P_Y]
+            if planar:
+                vz = 0.0
+                rz = 0.0
+            else:
+                vz = vzi - P[q + P_VZ]
+                rz = zi - P[q + P_Z]
+            b = rx * vx + ry * vy + rz * vz
+            sig = ri + P[q + P_R]
+            c = rx * rx + ry * ry + rz * rz - sig * sig
+            v2 = vx * vx + vy * vy + vz * vz
+            disc = b * b - v2 * c
+            root = c / (-b + math.sqrt(max(disc, 0.0)))
+            hit = (b < 0.0) & ((c <= 0.0) | ((c < -2.0 * b * span) & (disc >= 0.0)))
+            tc = t if c <= 0.0 else t + root
+            tc = tc if hit else np.inf
+            better = tc < best
+            best = tc if better else best
+            pf = float(j) if better else pf
+            bj = ev_time[j]
+            better = tc < bj
+            ev_time[j] = tc if better else bj
+            partf[j] = fi if better else partf[j]
+        ev_time[i] = best
+        partf[i] = pf
+    for i in range(n):
+        o = P_ROW * i
+        ev_time[i] = _finish_event(i, t, P[o + P_X], P[o + P_Y], P[o + P_Z], P[o + P_VX], P[o + P_VY], P[o + P_VZ],
+                                   ev_time[i], partf[i], R, half_skin, ncoll, ev)
     _queue_build(ev_time, T, L)
 
 
@@ -731,7 +803,7 @@ def advance(pos, vel, omega, radius, inv_mass, inv_inertia, species, pp, pw, wal
     ref_pos and last_coll hold the new state; on TOO_MANY_EVENTS they are left as they were
     (counters, energy and the returned lists are then mid-step: the caller keeps its copies).
     """
-    P, Q, R, ev, ev_time, ncoll, T, X = work
+    P, Q, R, ev, ev_time, ncoll, T, X, F = work
     n = pos.shape[0]
     L = T.shape[0] // 4
     planar = _load(pos, vel, omega, radius, inv_mass, inv_inertia, last_coll, wall_normal, dim2, P, Q, ncoll)
@@ -757,7 +829,7 @@ def advance(pos, vel, omega, radius, inv_mass, inv_inertia, species, pp, pw, wal
             if not dim2:
                 P[o + P_VZ] += (gz + ext_force[i, 2] * im) * dt
             P[o + P_T] = 0.0
-        _predict_all(0.0, dt, P, nbr_start_u, nbr_u, walls, R, half_skin, ncoll, ev, ev_time, T, L, planar)
+        _predict_all(0.0, dt, P, nbr_start_u, nbr_u, walls, R, half_skin, ncoll, ev, ev_time, T, L, planar, F)
         events = np.int64(0)
         t = 0.0
         while n > 0:
@@ -777,7 +849,7 @@ def advance(pos, vel, omega, radius, inv_mass, inv_inertia, species, pp, pw, wal
             _set_reference(X, radius, walls, skin, R, ev_time)
             counters[C_REBUILDS] += 1
             rebuilt = True
-            _predict_all(t, dt, P, nbr_start_u, nbr_u, walls, R, half_skin, ncoll, ev, ev_time, T, L, planar)
+            _predict_all(t, dt, P, nbr_start_u, nbr_u, walls, R, half_skin, ncoll, ev, ev_time, T, L, planar, F)
         counters[C_EVENTS] += events
         if reason == EV_LIMIT:
             info[0] = s

@@ -314,19 +314,46 @@ def _gather_range(lo, hi, pos, vel, omega, radius, mass, species, pw, wall_now, 
         torque[i, 1] = ty
         torque[i, 2] = tz
         if mode >= 1:
-            kicks = 2 if mode == 2 else 1
-            for _ in range(kicks):  # the two half kicks stay two additions: bitwise as separate passes
-                for d in range(3):
-                    vel[i, d] += half * force[i, d] * inv_mass[i]
-                    omega[i, d] += half * torque[i, d] * inv_inertia[i]
+            # in registers (re-reading force and vel from memory after each store chained the updates through
+            # store-to-load forwarding: 23 % slower); the two half kicks stay two additions, bitwise as separate passes
+            im = inv_mass[i]
+            ii = inv_inertia[i]
+            ax = half * fx * im
+            ay = half * fy * im
+            az = half * fz * im
+            bx = half * tx * ii
+            by = half * ty * ii
+            bz = half * tz * ii
+            vx = vel[i, 0] + ax
+            vy = vel[i, 1] + ay
+            vz = vel[i, 2] + az
+            wx = omega[i, 0] + bx
+            wy = omega[i, 1] + by
+            wz = omega[i, 2] + bz
             if mode == 2:
-                d2 = 0.0
-                for d in range(3):
-                    pos[i, d] += dt * vel[i, d]
-                    dd = pos[i, d] - ref_pos[i, d]
-                    d2 += dd * dd
-                if d2 > limit2:
+                vx += ax
+                vy += ay
+                vz += az
+                wx += bx
+                wy += by
+                wz += bz
+                px = pos[i, 0] + dt * vx
+                py = pos[i, 1] + dt * vy
+                pz = pos[i, 2] + dt * vz
+                pos[i, 0] = px
+                pos[i, 1] = py
+                pos[i, 2] = pz
+                dx = px - ref_pos[i, 0]
+                dy = py - ref_pos[i, 1]
+                dz = pz - ref_pos[i, 2]
+                if dx * dx + dy * dy + dz * dz > limit2:
                     moved += 1
+            vel[i, 0] = vx
+            vel[i, 1] = vy
+            vel[i, 2] = vz
+            omega[i, 0] = wx
+            omega[i, 1] = wy
+            omega[i, 2] = wz
     return moved
 
 

@@ -56,15 +56,20 @@ def multicontact_ratio(nc: np.ndarray) -> float:
 def contact_force(engine) -> np.ndarray:
     """Sum of the contact forces (particles and walls) on each particle [N], (N, 3).
 
-    The engine's total force is contacts + m g + gas force (``ext_force``); soft-sphere
-    engines only (hard-sphere collisions are impulses and have no force).
+    The engine's total force is contacts + m g + gas force (``gas_force``); soft-sphere
+    engines only (hard-sphere collisions are impulses and have no force). With a drag that
+    follows the particle's velocity every sub-step (``ext_damping``) the total force was
+    evaluated at the mid-step velocity and the gas force here at the current one: they differ
+    by K_p a dt/2, far below the contact forces this is used for.
     """
     st = engine.state
-    return st.force - st.mass[:, None] * engine.gravity[None, :] - engine.ext_force
+    return st.force - st.mass[:, None] * engine.gravity[None, :] - gas_force(engine)
 
 
 def gas_force(engine) -> np.ndarray:
-    """The gas force on each particle [N], (N, 3) (drag, with −V_p∇p when enabled)."""
+    """The gas force on each particle [N], (N, 3) (drag, with −V_p∇p when enabled), at the current velocity."""
+    if hasattr(engine, "external_force"):
+        return engine.external_force()
     return engine.ext_force.copy()
 
 

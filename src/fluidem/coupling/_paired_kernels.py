@@ -249,6 +249,46 @@ def particle_forces(position, velocity, volume, kp, u, v, p, dx, dy, px, py, pre
         store_force(out, total, q, fx, fy, fz, follow)
 
 
+@njit(cache=True, error_model="numpy")
+def particle_forces_split(position, velocity, volume, kp, u, v, p, dx, dy, px, py, pressure_force, dim2, ext, damp,
+                          total):
+    """``particle_forces`` split for a drag that follows the particle's own velocity (``drag_update =
+    "substep"``): the fixed part ext[q] = K_q u_q − V_q ∇p_q and the coefficient damp[q] = K_q, so that
+    the engine evaluates ext − K v at every sub-step's velocity (Sun 2007 eq. 29 with u_q held from the
+    step). ``total`` (N, 3) follows the change of the force at the current velocity:
+    += (ext_new − K_new v) − (ext_old − K_old v). z of ext is 0 (the gas has no z velocity)."""
+    nx, ny = p.shape
+    idx, idy = 1.0 / dx, 1.0 / dy
+    three = velocity.shape[1] > 2
+    for q in range(position.shape[0]):
+        x = position[q, 0]
+        y = position[q, 1]
+        ci0, ci1, cw0, cw1 = _centre_axis(x, idx, nx, px)
+        fi0, fi1, fw0, fw1 = _face_axis(x, idx, nx, px)
+        cj0, cj1, cv0, cv1 = _centre_axis(y, idy, ny, py)
+        fj0, fj1, fv0, fv1 = _face_axis(y, idy, ny, py)
+        k = kp[q]
+        ax = k * _mean(u, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1)
+        ay = k * _mean(v, ci0, ci1, cw0, cw1, fj0, fj1, fv0, fv1)
+        if pressure_force:  # −V_p ∇p, Sun eq. 28
+            gx, gy = _gradient_at(p, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, ci0, ci1, cw0, cw1, fj0, fj1, fv0, fv1,
+                                  nx, ny, idx, idy, px, py)
+            ax -= volume[q] * gx
+            ay -= volume[q] * gy
+        vx = velocity[q, 0]
+        vy = velocity[q, 1]
+        vz = velocity[q, 2] if three else 0.0
+        c = damp[q]
+        total[q, 0] += (ax - k * vx) - (ext[q, 0] - c * vx)
+        total[q, 1] += (ay - k * vy) - (ext[q, 1] - c * vy)
+        if not dim2:
+            total[q, 2] += (0.0 - k * vz) - (ext[q, 2] - c * vz)
+        ext[q, 0] = ax
+        ext[q, 1] = ay
+        ext[q, 2] = 0.0
+        damp[q] = k
+
+
 @njit(cache=True, inline="always")
 def _faces_of_axis(beta, solids, periodic, bf, sf):
     """``cell_faces`` along axis 0 of beta (nx, ny) → faces (nx + 1, ny); the y-faces are this on

@@ -24,9 +24,13 @@ At the start of every gas step (every ``substeps`` DEM steps):
 Drag a particle hands to a face whose velocity the gas does not solve (a wall, an inflow) is
 momentum exchanged with that boundary. ``exchange_balance`` reports the three sums.
 
-With ``drag_update = "substep"`` step 4 is repeated before every sub-step with the current
-positions and velocities in the gas field of t + DT (``"particle"`` keeps K_p of the step;
-``"cell_beta"`` re-evaluates it), which makes the pairing approximate. The phase within DT
+With ``drag_update = "substep"`` (the default) the drag follows the particles through the
+sub-steps in the gas field of t + DT, which makes the pairing approximate: ``"particle"`` keeps
+K_p, u_p and ∇p_p of the step and the engine evaluates K_p (u_p − v) − V_p ∇p_p at each
+sub-step's own velocity v inside its one compiled call (engines with ``ext_damping``; the
+others, and ``"cell"`` and ``"cell_beta"``, repeat step 4 before every sub-step with the current
+positions and velocities, ``"cell_beta"`` re-evaluating β). ``"frozen"`` holds the force of
+step 4 for the whole DT: then the particles gain exactly the momentum the gas lost. The phase within DT
 is ``engine.steps % substeps``, so a run can stop (observers, checkpoints) after any DEM step
 and continue exactly.
 
@@ -80,6 +84,10 @@ class GasCoupling:
         st = engine.state
         self.volume = math.pi / 6.0 * (2.0 * st.radius) ** 3
         self.exchange = self.options.momentum_exchange
+        # "substep" drag of the "particle" exchange: the engine evaluates K_p (u_p − v) − V_p ∇p at every
+        # sub-step's own velocity (ext_force = K_p u_p − V_p ∇p, ext_damping = K_p), in its one compiled call
+        self._split = (self.options.drag_update == "substep" and self.exchange == "particle"
+                       and hasattr(engine, "ext_damping"))
         ipar = self.solver._ipar
         self._periodic = (bool(ipar[SK.I_PX]), bool(ipar[SK.I_PY]))
         gd = self.grid
@@ -227,6 +235,13 @@ class GasCoupling:
         out of range raise ValueError after the pass (those particles' forces are then NaN).
         """
         eng = self.engine
+        if self._split and self._paired_ready:
+            st, gs, gd = self._particles(), self.state, self.grid
+            self._check_gas()
+            P.particle_forces_split(st.position, st.velocity, self.volume, self._kp, gs.u, gs.v, gs.p, gd.dx, gd.dy,
+                                    *self._periodic, bool(self.options.pressure_gradient_force), bool(eng.dim2),
+                                    eng.ext_force, eng.ext_damping, st.force)
+            return
         self._forces(eng.ext_force, eng.state.force)
 
     def _forces(self, out, total, pressure=None) -> None:
@@ -294,7 +309,7 @@ class GasCoupling:
             phase = eng.steps % self.substeps
             if phase == 0:
                 self.gas_step()
-            if self.options.drag_update == "substep":
+            if self.options.drag_update == "substep" and not self._split:
                 if phase > 0:
                     self.set_particle_forces()
                 n = 1

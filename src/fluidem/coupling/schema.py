@@ -10,12 +10,14 @@ cell-averaged drag β V_cell (u − v_s), shared by the particles of the cell in
 their volume, the gas receiving its opposite; ``"cell_beta"`` the gas takes β of the
 cell-averaged slip while each particle takes its own drag — as MFIX in Sun 2007 (the
 assumption after eq. 35), not equal and opposite; kept to compare with it.
-``drag_update`` says when the particle drag is re-evaluated: ``"frozen"`` once per gas
-step DT (one compiled call for all DEM sub-steps), ``"substep"`` every DEM sub-step with
-the particle's current position and velocity in the gas field of that DT (slower: one
-call per sub-step; the drag coefficient of the "particle" exchange and the cell β of
-"cell" are kept from the step's start, and the gas has already taken its share, so the
-pairing of the two sides is then approximate).
+``drag_update`` says when the particle drag is re-evaluated (the issue's "re-evaluated every
+sub-step with the gas frozen (default) or held for the whole DT"): ``"substep"`` (default) every
+DEM sub-step in the gas field of that DT — for the "particle" exchange with its drag coefficient
+K_p, gas velocity and pressure gradient at the particle kept from the step's start and the
+particle's own velocity of each sub-step, inside the engine's one compiled call; for "cell" and
+"cell_beta" with the particle's current position and velocity, one call per sub-step (slower) —
+or ``"frozen"``, the force of the step's start held for the whole DT. The gas has taken its
+share at the step's start, so only ``"frozen"`` pairs the two sides exactly.
 
 Example (TOML)::
 
@@ -23,7 +25,7 @@ Example (TOML)::
     drag = "hoomans1996"
     pressure_gradient_force = true
     momentum_exchange = "particle"
-    drag_update = "frozen"
+    drag_update = "substep"
     [coupling.voidage]
     method = "centroid"
 """
@@ -48,8 +50,8 @@ class CouplingSection(BaseModel):
     momentum_exchange: Literal["particle", "cell", "cell_beta"] = Field(
         "particle", description="drag per particle, paired with the gas (particle); Sun's cell-averaged drag "
                                 "shared in the cell (cell); or the unpaired MFIX 2007 form (cell_beta)")
-    drag_update: Literal["substep", "frozen"] = Field("frozen", description="drag re-evaluated per DEM sub-step "
-                                                                          "or once per gas step")
+    drag_update: Literal["substep", "frozen"] = Field("substep", description="drag re-evaluated per DEM sub-step "
+                                                                           "(gas frozen) or held for the gas step")
 
     @field_validator("drag")
     @classmethod

@@ -248,7 +248,7 @@ def wall_contact(i, w, pos, vel, omega, radius, mass, species, pw, wall_now, wal
 
 @njit(cache=True, error_model="numpy")
 def _gather_range(lo, hi, pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_hist, wall_touch,
-                  gravity, ext_force, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos,
+                  gravity, ext_force, ext_damping, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos,
                   limit2):
     """gather_forces for particles lo..hi−1 (serial code; the parallel driver splits the range)."""
     half = 0.5 * dt
@@ -256,9 +256,12 @@ def _gather_range(lo, hi, pos, vel, omega, radius, mass, species, pw, wall_now, 
     nw = wall_normal.shape[0]
     update = mode > 0
     for i in range(lo, hi):
-        fx = mass[i] * gravity[0] + ext_force[i, 0]
-        fy = mass[i] * gravity[1] + ext_force[i, 1]
-        fz = mass[i] * gravity[2] + ext_force[i, 2]
+        # external force: a fixed part and a linear drag −c v at the current velocity (the gas's drag
+        # coefficient K_p when the coupling updates the particle's own velocity every sub-step)
+        c = ext_damping[i]
+        fx = mass[i] * gravity[0] + (ext_force[i, 0] - c * vel[i, 0])
+        fy = mass[i] * gravity[1] + (ext_force[i, 1] - c * vel[i, 1])
+        fz = mass[i] * gravity[2] + (ext_force[i, 2] - c * vel[i, 2])
         fx += sum_f[i, 0]
         fy += sum_f[i, 1]
         fz += sum_f[i, 2]
@@ -382,21 +385,21 @@ GATHER_CHUNK = 512  # particles per parallel work item of gather_forces
 
 @njit(cache=True, error_model="numpy", parallel=True)
 def _gather_parallel(pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_hist, wall_touch,
-                     gravity, ext_force, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos,
+                     gravity, ext_force, ext_damping, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos,
                      limit2):
     n = pos.shape[0]
     nchunk = (n + GATHER_CHUNK - 1) // GATHER_CHUNK
     moved = 0
     for c in prange(nchunk):
         moved += _gather_range(c * GATHER_CHUNK, min(n, (c + 1) * GATHER_CHUNK), pos, vel, omega, radius, mass,
-                               species, pw, wall_now, wall_normal, wall_hist, wall_touch, gravity, ext_force, dim2, sum_f,
+                               species, pw, wall_now, wall_normal, wall_hist, wall_touch, gravity, ext_force, ext_damping, dim2, sum_f,
                                sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2)
     return moved
 
 
 @njit(cache=True, error_model="numpy")
 def gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
-                  wall_hist, wall_touch, gravity, ext_force, dim2, sum_f, sum_c, t, dt, force, torque, inv_mass, inv_inertia,
+                  wall_hist, wall_touch, gravity, ext_force, ext_damping, dim2, sum_f, sum_c, t, dt, force, torque, inv_mass, inv_inertia,
                   mode, ref_pos, limit2, parallel):
     """Total force and torque per particle: contact sums, walls, gravity, external force.
 
@@ -411,10 +414,10 @@ def gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_
     n = pos.shape[0]
     if parallel and n > GATHER_CHUNK:
         return _gather_parallel(pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_hist,
-                                wall_touch, gravity, ext_force, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia,
+                                wall_touch, gravity, ext_force, ext_damping, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia,
                                 mode, ref_pos, limit2)
     return _gather_range(0, n, pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_hist,
-                         wall_touch, gravity, ext_force, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode,
+                         wall_touch, gravity, ext_force, ext_damping, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode,
                          ref_pos, limit2)
 
 
@@ -448,7 +451,7 @@ def rebuild(pos, radius, skin, dim2, row_start, partner, hist, ref_pos):
 
 @njit(cache=True, error_model="numpy")
 def compute_forces(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, wall_point0, wall_normal,
-                   wall_hist, gravity, ext_force, dim2, row_start, partner, hist, slab_start, slab_members,
+                   wall_hist, gravity, ext_force, ext_damping, dim2, row_start, partner, hist, slab_start, slab_members,
                    t, dt, update, force, torque, parallel):
     """Forces and torques at the current state (no integration; history updated only if ``update``)."""
     sum_f = np.zeros_like(force)
@@ -456,12 +459,12 @@ def compute_forces(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, 
     pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
                 dt, update, sum_f, sum_c, parallel)
     gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal, wall_hist,
-                  touching_walls(wall_hist), gravity, ext_force, dim2, sum_f, sum_c, t, dt, force, torque, mass, mass, 0, pos, 0.0, parallel)
+                  touching_walls(wall_hist), gravity, ext_force, ext_damping, dim2, sum_f, sum_c, t, dt, force, torque, mass, mass, 0, pos, 0.0, parallel)
 
 
 @njit(cache=True, error_model="numpy")
 def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia, species, pp, pw,
-            wall_motion, wall_point0, wall_normal, wall_hist, gravity, ext_force, dim2,
+            wall_motion, wall_point0, wall_normal, wall_hist, gravity, ext_force, ext_damping, dim2,
             row_start, partner, hist, slab_start, slab_members, ref_pos, skin, step0, dt, nsteps, parallel):
     """Run ``nsteps`` velocity-Verlet DEM steps from step ``step0`` (time step0 * dt).
 
@@ -497,6 +500,6 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
                     dt, True, sum_f, sum_c, parallel)
         mode = 2 if s < nsteps - 1 else 1
         moved = gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
-                              wall_hist, wall_touch, gravity, ext_force, dim2, sum_f, sum_c, t, dt, force, torque, inv_mass,
+                              wall_hist, wall_touch, gravity, ext_force, ext_damping, dim2, sum_f, sum_c, t, dt, force, torque, inv_mass,
                               inv_inertia, mode, ref_pos, limit2, parallel)
     return row_start, partner, hist, slab_start, slab_members, rebuilds

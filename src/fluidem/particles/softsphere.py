@@ -47,6 +47,9 @@ class SoftSphereEngine:
         self.dim2 = case.particles.dimensions == 2
         self.walls = build_walls(case)
         st = set_up_particles(self, case, state)
+        # linear drag coefficient c [kg/s] per particle: the external force is ext_force − c v, with v the
+        # velocity where the force is evaluated (each sub-step); zero unless a coupling sets it
+        self.ext_damping = np.zeros(st.n)
         self.pp, self.pw, self.contact_times = self._contact_tables()
         self.wall_point0, self.wall_normal, self.wall_motion = self.walls.arrays()
         self.wall_hist = np.zeros((st.n, len(self.walls.planes), 3))
@@ -159,9 +162,13 @@ class SoftSphereEngine:
         st = self.state
         K.compute_forces(st.position, st.velocity, st.omega, st.radius, st.mass, st.species, self.pp, self.pw,
                          self.wall_motion, self.wall_point0, self.wall_normal, self.wall_hist, self.gravity,
-                         self.ext_force, self.dim2, self.row_start, self.partner, self.hist, self.slab_start,
+                         self.ext_force, self.ext_damping, self.dim2, self.row_start, self.partner, self.hist, self.slab_start,
                          self.slab_members, self.time, self.dt, update, st.force, st.torque,
                          numba.get_num_threads() > 1)
+
+    def external_force(self) -> np.ndarray:
+        """The external (gas) force on each particle at the current velocity, ext_force − c v [N], (N, 3)."""
+        return self.ext_force - self.ext_damping[:, None] * self.state.velocity
 
     def advance(self, nsteps: int) -> None:
         """Run ``nsteps`` DEM steps of ``self.dt`` in one compiled call."""
@@ -171,7 +178,7 @@ class SoftSphereEngine:
         (self.row_start, self.partner, self.hist, self.slab_start, self.slab_members, nreb) = K.advance(
             st.position, st.velocity, st.omega, st.force, st.torque, st.radius, st.mass, self.inv_mass,
             self.inv_inertia, st.species, self.pp, self.pw, self.wall_motion, self.wall_point0, self.wall_normal,
-            self.wall_hist, self.gravity, self.ext_force, self.dim2, self.row_start, self.partner, self.hist,
+            self.wall_hist, self.gravity, self.ext_force, self.ext_damping, self.dim2, self.row_start, self.partner, self.hist,
             self.slab_start, self.slab_members, self.ref_pos, self.skin, self.steps, self.dt, nsteps,
             numba.get_num_threads() > 1)
         self.steps += nsteps
@@ -186,6 +193,7 @@ class SoftSphereEngine:
             "engine/wall_hist": self.wall_hist, "engine/ref_pos": self.ref_pos, "engine/row_start": self.row_start,
             "engine/partner": self.partner, "engine/hist": self.hist, "engine/slab_start": self.slab_start,
             "engine/slab_members": self.slab_members, "engine/ext_force": self.ext_force,
+            "engine/ext_damping": self.ext_damping,
         })
         return out
 
@@ -197,6 +205,7 @@ class SoftSphereEngine:
             getattr(self.state, k)[...] = arrays[f"state/{k}"]
         for k in ("wall_hist", "ref_pos", "ext_force"):
             getattr(self, k)[...] = arrays[f"engine/{k}"]
+        self.ext_damping[...] = arrays.get("engine/ext_damping", 0.0)  # checkpoints before it existed: none
         for k in ("row_start", "partner", "hist", "slab_start", "slab_members"):
             setattr(self, k, np.ascontiguousarray(arrays[f"engine/{k}"]))
         self.dt = float(scalars["dt"])

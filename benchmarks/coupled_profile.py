@@ -1,7 +1,7 @@
 """Where the wall time of a coupled run goes: DEM, gas solve, map, cell β, interpolation + drag.
 
     python benchmarks/coupled_profile.py [--case tsuji-jet] [--until 0.2] [--repeat 3]
-                                         [--set coupling.drag_update=substep ...]
+                                         [--set coupling.drag_update=frozen ...]
                                          [--from runs/tsuji/restart.h5]
 
 ``--from`` starts each timed run from a checkpoint of the same case (a developed, bubbling
@@ -10,14 +10,15 @@ bed instead of the settling start); ``--until`` then counts from the checkpoint'
 Builds ``Simulation(load_case(case))`` (no run directory, no observers), warms the compiled
 kernels up with a short run of a copy, then times ``Simulation.run(until=…)`` of a fresh one.
 Each component is timed with ``time.perf_counter`` by wrapping the bound methods of that one
-simulation's objects (instance attributes; nothing global is patched):
+simulation's objects (instance attributes; nothing global is patched; ``fluidem.bench.profile_coupled``,
+which ``fluidem bench`` uses too):
 
     DEM             engine.advance
     gas solve       gas.solver.advance
     map             gas._map            (particles → voidage, solids velocity)
     beta            gas.cell_beta       (Sun 2007 eq. 33; "cell" and "cell_beta" exchanges)
     deposit         gas._deposit        (K_p and face sums of the "particle" exchange)
-    interp+drag     gas.set_particle_forces (Hoomans 1996 eqs 40-41 interpolation, drag, −V_p ∇p,
+    forces          gas.set_particle_forces (Hoomans 1996 eqs 40-41 interpolation, drag, −V_p ∇p,
                     and the swap into the engine's external and total forces)
     other           the rest of run(): the step loop, chunking, checks
 
@@ -27,14 +28,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import time
-from collections import defaultdict
 from pathlib import Path
 
 import fluidem as fd
 
-COMPONENTS = (("DEM", "engine", "advance"), ("gas solve", "solver", "advance"), ("map", "gas", "_map"),
-              ("beta", "gas", "cell_beta"), ("deposit", "gas", "_deposit"), ("interp+drag", "gas", "set_particle_forces"))
+from fluidem.bench import COUPLED_COMPONENTS as COMPONENTS
+from fluidem.bench import profile_coupled
 
 
 def _parse_sets(items):
@@ -48,39 +47,12 @@ def _parse_sets(items):
     return out
 
 
-def _wrap(obj, name, key, acc, calls):
-    fn = getattr(obj, name)
-
-    def timed(*args, **kwargs):
-        t0 = time.perf_counter()
-        try:
-            return fn(*args, **kwargs)
-        finally:
-            acc[key] += time.perf_counter() - t0
-            calls[key] += 1
-
-    setattr(obj, name, timed)
-
-
 def profile(case, until: float, start=None) -> dict:
     sim = fd.Simulation(case)
     if start is not None:
         sim.load_checkpoint(start)
         until = sim.time + until
-    acc, calls = defaultdict(float), defaultdict(int)
-    owners = {"engine": sim.engine, "gas": sim.gas, "solver": sim.gas.solver}
-    for key, owner, name in COMPONENTS:
-        _wrap(owners[owner], name, key, acc, calls)
-    t0 = time.perf_counter()
-    steps0 = sim.gas.gas_steps
-    sim.run(until=until)
-    total = time.perf_counter() - t0
-    row = {k: acc[k] for k, _, _ in COMPONENTS}
-    row["other"] = total - sum(row.values())
-    row["total"] = total
-    row["gas_steps"] = sim.gas.gas_steps - steps0
-    row["calls"] = dict(calls)
-    return row
+    return profile_coupled(sim, until)
 
 
 def main() -> None:

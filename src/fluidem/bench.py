@@ -8,6 +8,12 @@ dense bed   The peer benchmark of shared/PEERS.md: monodisperse spheres d = 4 mm
             closed box, loaded settled and at rest. The settled beds are made once by
             this engine (lattice → settle → quench) and cached.
 pour        The built-in 2D ``pour`` case (500 particles), stepping from its start.
+coupled     The built-in ``tsuji-jet`` case (Sun 2007: 2400 soft spheres, 15 × 45 gas cells,
+            DT = 1e-4 s, 7 DEM sub-steps) including the gas, from its start for ``coupled_until``
+            simulated seconds after a short warm-up that compiles: particle-steps per second,
+            ms per gas step split into DEM, gas solve, map, deposit, forces and the rest, and
+            the wall time that 20 s at this pace would take (the case's length; the issue's
+            target is 3 minutes on 2 cores).
 gas step    One gas-phase step on the 15 × 25, 39 × 60 and 150 × 300 grids
             (``fluidem.gas.gas_step_benchmark``: Hoomans 1996 orifice bed), with the
             pressure-correction solver ``gas_linear_solver`` ("auto", or e.g. "pyamg"; for
@@ -154,8 +160,76 @@ def time_engine(eng, steps: int, target_seconds: float = 5.0) -> tuple[int, floa
     return steps, time.perf_counter() - t0
 
 
+# where a coupled gas step's wall time goes: (name, owner, bound method) of one simulation's objects
+COUPLED_COMPONENTS = (("DEM", "engine", "advance"), ("gas solve", "solver", "advance"), ("map", "gas", "_map"),
+                      ("beta", "gas", "cell_beta"), ("deposit", "gas", "_deposit"),
+                      ("forces", "gas", "set_particle_forces"))
+
+
+def _wrap(obj, name, key, acc, calls):
+    """Time every call of ``obj.name`` into acc[key] (an instance attribute: nothing global is patched)."""
+    fn = getattr(obj, name)
+
+    def timed(*args, **kwargs):
+        t0 = time.perf_counter()
+        try:
+            return fn(*args, **kwargs)
+        finally:
+            acc[key] += time.perf_counter() - t0
+            calls[key] += 1
+
+    setattr(obj, name, timed)
+
+
+def profile_coupled(sim, until: float) -> dict:
+    """Run ``sim`` (a coupled Simulation) to ``until`` timing its parts; returns seconds per part, the
+    rest ("other"), the total and the gas steps taken."""
+    from collections import defaultdict
+
+    acc, calls = defaultdict(float), defaultdict(int)
+    owners = {"engine": sim.engine, "gas": sim.gas, "solver": sim.gas.solver}
+    for key, owner, name in COUPLED_COMPONENTS:
+        _wrap(owners[owner], name, key, acc, calls)
+    steps0 = sim.gas.gas_steps
+    t0 = time.perf_counter()
+    sim.run(until=until)
+    total = time.perf_counter() - t0
+    row = {k: acc[k] for k, _, _ in COUPLED_COMPONENTS}
+    row["other"] = total - sum(row.values())
+    row["total"] = total
+    row["gas_steps"] = sim.gas.gas_steps - steps0
+    row["calls"] = dict(calls)
+    return row
+
+
+def time_coupled(case_name: str = "tsuji-jet", until: float = 0.25, warmup: float = 0.01,
+                 threads: int | None = None) -> dict:
+    """Coupled throughput of a built-in case from its start (see the module docstring)."""
+    from .case import load_case
+    from .simulation import Simulation
+
+    case = load_case(case_name)
+    if threads is not None:
+        case = case.with_overrides({"threads": threads})
+    sim = Simulation(case)
+    sim.run(until=warmup)  # compiles (or loads the caches)
+    t_start = sim.time
+    parts = profile_coupled(sim, t_start + until)
+    n = sim.state.n
+    dem_steps = parts["gas_steps"] * sim.gas.substeps
+    per_step = parts["total"] / max(parts["gas_steps"], 1)
+    return {"problem": f"coupled {case_name}", "n_particles": n, "threads": sim.threads,
+            "sim_seconds": sim.time - t_start, "wall_s": parts["total"], "gas_steps": parts["gas_steps"],
+            "substeps": sim.gas.substeps, "particle_steps_per_s": n * dem_steps / parts["total"],
+            "ms_per_gas_step": 1e3 * per_step,
+            "ms_per_gas_step_parts": {k: 1e3 * parts[k] / max(parts["gas_steps"], 1)
+                                      for k in [c[0] for c in COUPLED_COMPONENTS] + ["other"]},
+            "minutes_for_20_s": per_step * round(20.0 / sim.gas.gas_dt) / 60.0}
+
+
 def run_bench(sizes="10000,100000", threads="1,2", steps: int = 0, as_json: str | None = None,
-              gas: bool = True, gas_linear_solver: str = "auto") -> list[dict]:
+              gas: bool = True, gas_linear_solver: str = "auto", coupled: bool = True,
+              coupled_until: float = 0.25) -> list[dict]:
     import numba
 
     from .analysis.probes import contacts
@@ -183,6 +257,17 @@ def run_bench(sizes="10000,100000", threads="1,2", steps: int = 0, as_json: str 
                      "wall_s": wall, "particle_steps_per_s": eng.state.n * nsteps / wall,
                      "contacts_per_particle": contacts(eng)["coordination"]})
         _print_row(rows[-1], header=not rows[:-1])
+    if coupled:
+        print(f"\n{'coupled (gas included)':28s} {'N':>6s} {'threads':>7s} {'sim s':>6s} {'wall s':>7s} "
+              f"{'particle-steps/s':>17s} {'ms/gas step':>11s} {'20 s takes':>10s}")
+        for t in threads:
+            r = time_coupled("tsuji-jet", until=coupled_until, threads=t)
+            rows.append(r)
+            print(f"{r['problem']:28s} {r['n_particles']:6d} {r['threads']:7d} {r['sim_seconds']:6.2f} "
+                  f"{r['wall_s']:7.2f} {r['particle_steps_per_s']:17.3e} {r['ms_per_gas_step']:11.3f} "
+                  f"{r['minutes_for_20_s']:8.1f} min", flush=True)
+            print("    ms per gas step: " + ", ".join(f"{k} {v:.3f}" for k, v in r["ms_per_gas_step_parts"].items()
+                                                     if k != "beta" or v > 0), flush=True)
     if gas:
         from .gas import gas_step_benchmark
 

@@ -85,7 +85,8 @@ def cmd_cases(args) -> int:
 def cmd_bench(args) -> int:
     from .bench import run_bench
 
-    run_bench(sizes=args.sizes, threads=args.threads, steps=args.steps, as_json=args.json, gas=not args.no_gas)
+    run_bench(sizes=args.sizes, threads=args.threads, steps=args.steps, as_json=args.json, gas=not args.no_gas,
+              coupled=not args.no_coupled, coupled_until=args.coupled_until)
     return 0
 
 
@@ -116,6 +117,9 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--steps", type=int, default=0, help="timed steps per problem (default: about 5 s of work)")
     b.add_argument("--json", metavar="FILE", help="also write the results as JSON")
     b.add_argument("--no-gas", action="store_true", help="skip the gas-step timings")
+    b.add_argument("--no-coupled", action="store_true", help="skip the coupled tsuji-jet timing")
+    b.add_argument("--coupled-until", type=float, default=0.25, metavar="T",
+                   help="simulated seconds of the coupled tsuji-jet timing (default 0.25)")
     b.set_defaults(func=cmd_bench)
 
     from .cli_plot import add_commands

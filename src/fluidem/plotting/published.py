@@ -122,10 +122,23 @@ PUBLISHED: dict[str, tuple[PublishedValue, ...]] = {
                        others=("simulated bubble larger than the experiment's, with satellite bubbles ahead of it",),
                        **_BUBBLE_KEYS),
     ),
-    # Sun et al. 2007 (soft spheres, 2D, one layer): the built-in cases tsuji-jet and goldschmidt.
+    # Sun et al. 2007 (soft spheres, 2D, one layer): the built-in cases tsuji-jet (and tsuji-jet-closed, the
+    # same bed with the bottom closed but for the jet) and goldschmidt.
     # Sun's numbers are means over 5-10 s; summary.json holds this run's means over that window
     # (or over the second half of a shorter run, which the table says).
     "tsuji-jet": (
+        PublishedValue("bulk coordination number", "about 1.2", "Sun et al. 2007 Fig 5, central jet",
+                       summary_key="coordination_number_avg", **_SUN_AVERAGE),
+        PublishedValue("multicontact ratio", "above 0.6 most of the time", "Sun et al. 2007 Fig 11, central jet",
+                       summary_key="multicontact_ratio_avg", **_SUN_AVERAGE),
+        PublishedValue("dominant frequency of the pressure drop 20 cm above the inlet",
+                       "Fig 3 (not given numerically)", "Sun et al. 2007, central jet",
+                       summary_key="pressure_20cm_dominant_frequency_Hz", unit="Hz", digits=3,
+                       window_text="power spectrum over", **_SUN_AVERAGE),
+        PublishedValue("largest contact force / drag (cell means; this run: its end state)", "up to 100", "Sun et al. 2007 Fig 7, corners beside the jet",
+                       summary_key="contact_drag_ratio_max", digits=3, when_missing="not measured; see the forces figure"),
+    ),
+    "tsuji-jet-closed": (
         PublishedValue("bulk coordination number", "about 1.2", "Sun et al. 2007 Fig 5, central jet",
                        summary_key="coordination_number_avg", **_SUN_AVERAGE),
         PublishedValue("multicontact ratio", "above 0.6 most of the time", "Sun et al. 2007 Fig 11, central jet",

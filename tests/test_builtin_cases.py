@@ -44,3 +44,14 @@ def test_sun_case_summary_gives_the_largest_cell_contact_to_gas_force_ratio(name
     expected = float(np.nanmax(np.where(ratio >= 0.0, ratio, np.nan)))
     assert summary["contact_drag_ratio_max"] == pytest.approx(expected, rel=1e-9)
     assert summary["contact_drag_ratio_max"] > 0.0
+    # the same figure at every probe time in probes.csv; the summary's average is over the second half of
+    # this short run (Sun's 5-10 s window for full runs)
+    import csv
+
+    with open(out / "probes.csv", newline="") as f:
+        rows = [(float(r["time_s"]), float(r["contact_drag_ratio_max"])) for r in csv.DictReader(f)]
+    assert rows[-1][1] == pytest.approx(expected, rel=1e-9)
+    lo, hi = summary["averages_window_s"]
+    window = [v for t, v in rows if lo - 1e-9 <= t <= hi + 1e-9]
+    assert len(window) >= 2
+    assert summary["contact_drag_ratio_max_avg"] == pytest.approx(np.mean(window), rel=1e-9)

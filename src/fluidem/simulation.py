@@ -333,11 +333,8 @@ class Simulation:
             out["pressure_drop_bed_Pa"] = F.pressure_drop(self.gas.grid, self.gas.state.p,
                                                           self.gas.grid.y_centres[-1] + 0.5 * self.gas.grid.dy)
             if not P.is_hard_sphere(eng):  # Sun 2007 Figs 7/12: cell contact force over gas force, end state
-                st = eng.state
-                ratio = F.cell_force_maps(self.gas.grid, st.position, st.mass, F.contact_force(eng),
-                                          F.gas_force(eng), eng.gravity)["force_ratio"]
-                ratio = ratio[np.isfinite(ratio) & (ratio >= 0.0)]
-                out["contact_drag_ratio_max"] = float(ratio.max()) if ratio.size else None
+                r = F.largest_force_ratio(self.gas.grid, eng)
+                out["contact_drag_ratio_max"] = r if math.isfinite(r) else None
             if self.out_dir is not None:
                 out.update(F.time_averages(self.out_dir / "probes.csv", self.time))
         out.update(self._summary_extra)

@@ -200,7 +200,19 @@ def bed_probes(sim) -> dict[str, float]:
                                              - sim.case.gas.properties.reference_pressure)
         out["pressure_drop_bed_Pa"] = pressure_drop(grid, gas.state.p, top)
         out["bubble_area_m2"] = bubble_area(grid, gas.state.voidage)
+        if hasattr(eng, "external_force"):  # soft spheres (hard-sphere collisions have no contact force)
+            out["contact_drag_ratio_max"] = largest_force_ratio(grid, eng)
     return out
+
+
+def largest_force_ratio(grid, engine) -> float:
+    """The largest cell ratio of contact force to gas force now (Sun 2007 Figs 7/12: "contact forces
+    may be as high as 100 times that of the drag forces"); NaN when no cell has both."""
+    st = engine.state
+    ratio = cell_force_maps(grid, st.position, st.mass, contact_force(engine), gas_force(engine),
+                            engine.gravity)["force_ratio"]
+    ratio = ratio[np.isfinite(ratio) & (ratio >= 0.0)]
+    return float(ratio.max()) if ratio.size else math.nan
 
 
 def cell_force_maps(grid, position, mass, contact, drag, gravity) -> dict[str, np.ndarray]:
@@ -259,6 +271,7 @@ AVERAGED = {  # probes.csv column → summary key of its time average
     "multicontact_ratio": "multicontact_ratio_avg",
     "pressure_drop_20cm_Pa": "pressure_drop_20cm_avg_Pa",
     "pressure_drop_bed_Pa": "pressure_drop_bed_avg_Pa",
+    "contact_drag_ratio_max": "contact_drag_ratio_max_avg",
 }
 
 

@@ -28,7 +28,8 @@ class ProbeWriter:
         if self.columns is None:
             self.columns = list(row)
         with open(self.path, "a", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=self.columns)
+            # a run resumed from an older version keeps that version's columns (new ones are left out)
+            w = csv.DictWriter(f, fieldnames=self.columns, extrasaction="ignore")
             if new:
                 w.writeheader()
             w.writerow({k: (f"{v:.10g}" if isinstance(v, float) else v) for k, v in row.items()})

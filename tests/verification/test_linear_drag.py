@@ -19,18 +19,22 @@ V0 = np.array([0.0, 1.0, 0.0])
 V_TERMINAL = np.array([2.0, 0.0, -0.5])
 
 
-def relax(tmp_path, dt, duration=1.0, rate=1.0):
-    """Relative velocity error after ``duration`` of relaxation at c/m = ``rate`` [1/s] with steps ``dt``."""
+def lone_sphere(tmp_path, v0):
+    """An engine with one sphere of 1 mm at (0.5, 0.5, 0.5) m moving at v0; no gravity, no walls."""
     csv = tmp_path / "lone.csv"
-    csv.write_text("x,y,z,diameter,vx,vy,vz\n0.5,0.5,0.5,0.001,%g,%g,%g\n" % tuple(V0))
-    case = validate_case({
+    csv.write_text("x,y,z,diameter,vx,vy,vz\n0.5,0.5,0.5,0.001,%g,%g,%g\n" % tuple(v0))
+    return SoftSphereEngine(validate_case({
         "name": "lone-sphere", "gravity": [0.0, 0.0, 0.0],
         "particles": {"dimensions": 3, "species": [{"diameter": 1e-3, "density": 2500.0, "count": 1}],
                       "contact": {"model": "linear_spring_dashpot", "stiffness": 100.0, "restitution": 0.9},
                       "placement": {"method": "file", "file": str(csv)}},
         "time": {"end": 1.0, "dt": 1e-5},
-    })
-    eng = SoftSphereEngine(case)
+    }))
+
+
+def relax(tmp_path, dt, duration=1.0, rate=1.0):
+    """Relative velocity error after ``duration`` of relaxation at c/m = ``rate`` [1/s] with steps ``dt``."""
+    eng = lone_sphere(tmp_path, V0)
     eng.dt = dt  # far above the contact limit: there are no contacts
     m = eng.state.mass[0]
     c = rate * m
@@ -53,16 +57,7 @@ def test_linear_drag_relaxes_to_the_exponential_at_first_order(tmp_path):
 
 def test_zero_drag_leaves_the_external_force_alone(tmp_path):
     """c = 0: v(t) = v0 + F t/m exactly up to round-off (ext_force − 0 v is ext_force)."""
-    csv = tmp_path / "lone.csv"
-    csv.write_text("x,y,z,diameter,vx,vy,vz\n0.5,0.5,0.5,0.001,0.0,1.0,0.0\n")
-    case = validate_case({
-        "name": "lone-sphere", "gravity": [0.0, 0.0, 0.0],
-        "particles": {"dimensions": 3, "species": [{"diameter": 1e-3, "density": 2500.0, "count": 1}],
-                      "contact": {"model": "linear_spring_dashpot", "stiffness": 100.0, "restitution": 0.9},
-                      "placement": {"method": "file", "file": str(csv)}},
-        "time": {"end": 1.0, "dt": 1e-5},
-    })
-    eng = SoftSphereEngine(case)
+    eng = lone_sphere(tmp_path, [0.0, 1.0, 0.0])
     m = eng.state.mass[0]
     eng.ext_force[:] = [m * 3.0, 0.0, 0.0]
     eng._compute_forces(update=False)

@@ -377,6 +377,21 @@ def _queue_build(ev_time, T, L):
 # cost more than the square roots and divisions they save. The partner index travels as a float so that every
 # choice is a masked move of a float register. p0, p1 (uint64) and nbr (uint32) are unsigned: no wrap-around.
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def _pair_time(rx, ry, rz, vx, vy, vz, sig, t, horizon):
+    """Collision time of a pair at separation r = x_i − x_j, relative velocity v and contact distance σ
+    (eq. 30 in the form above), or inf when the pair does not approach or its root lies beyond
+    ``horizon`` (a time span; the pruning bound). Scalars only, no branches."""
+    b = rx * vx + ry * vy + rz * vz
+    c = rx * rx + ry * ry + rz * rz - sig * sig
+    v2 = vx * vx + vy * vy + vz * vz
+    disc = b * b - v2 * c
+    root = c / (-b + math.sqrt(max(disc, 0.0)))
+    hit = (b < 0.0) & ((c <= 0.0) | ((c < -2.0 * b * horizon) & (disc >= 0.0)))
+    tc = t if c <= 0.0 else t + root
+    return tc if hit else np.inf
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
 def _scan(t, xi, yi, zi, vxi, vyi, vzi, ri, best, partf, P, p0, p1, nbr, sync):
     """Earliest collision of a particle at (x, v, R)_i with its neighbours nbr[p0:p1] if before ``best``:
     returns the new (best, partner as a float). ``sync``: every particle's clock is t, so the stored positions
@@ -399,15 +414,7 @@ def _scan(t, xi, yi, zi, vxi, vyi, vzi, ri, best, partf, P, p0, p1, nbr, sync):
             rx = xi - (P[o + P_X] + vxj * dtj)
             ry = yi - (P[o + P_Y] + vyj * dtj)
             rz = zi - (P[o + P_Z] + vzj * dtj)
-        b = rx * vx + ry * vy + rz * vz
-        sig = ri + P[o + P_R]
-        c = rx * rx + ry * ry + rz * rz - sig * sig
-        v2 = vx * vx + vy * vy + vz * vz
-        disc = b * b - v2 * c
-        root = c / (-b + math.sqrt(max(disc, 0.0)))
-        hit = (b < 0.0) & ((c <= 0.0) | ((c < -2.0 * b * (best - t)) & (disc >= 0.0)))
-        tc = t if c <= 0.0 else t + root
-        tc = tc if hit else np.inf
+        tc = _pair_time(rx, ry, rz, vx, vy, vz, ri + P[o + P_R], t, best - t)
         better = tc < best
         best = tc if better else best
         partf = float(j) if better else partf
@@ -570,15 +577,7 @@ def _predict_all(t, t_end, P, nbr_start, nbr, walls, R, half_skin, ncoll, ev, ev
             else:
                 vz = vzi - P[q + P_VZ]
                 rz = zi - P[q + P_Z]
-            b = rx * vx + ry * vy + rz * vz
-            sig = ri + P[q + P_R]
-            c = rx * rx + ry * ry + rz * rz - sig * sig
-            v2 = vx * vx + vy * vy + vz * vz
-            disc = b * b - v2 * c
-            root = c / (-b + math.sqrt(max(disc, 0.0)))
-            hit = (b < 0.0) & ((c <= 0.0) | ((c < -2.0 * b * span) & (disc >= 0.0)))
-            tc = t if c <= 0.0 else t + root
-            tc = tc if hit else np.inf
+            tc = _pair_time(rx, ry, rz, vx, vy, vz, ri + P[q + P_R], t, span)
             better = tc < best
             best = tc if better else best
             pf = float(j) if better else pf

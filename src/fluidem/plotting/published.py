@@ -87,6 +87,22 @@ _BUBBLE_KEYS = {"summary_key": "bubble_detected", "fallback_keys": ("bubble",), 
                 "details": (("largest", "bubble_max_area_m2", 1e4, "cm²"),)}
 _SUN_AVERAGE = {"window_key": "averages_window_s"}  # Sun's numbers are 5–10 s means
 
+# Sun et al. 2007 central jet: the published values of both readings of its inflow (tsuji-jet, tsuji-jet-closed)
+_SUN_JET = (
+    PublishedValue("bulk coordination number", "about 1.2", "Sun et al. 2007 Fig 5, central jet",
+                   summary_key="coordination_number_avg", **_SUN_AVERAGE),
+    PublishedValue("multicontact ratio", "above 0.6 most of the time", "Sun et al. 2007 Fig 11, central jet",
+                   summary_key="multicontact_ratio_avg", **_SUN_AVERAGE),
+    PublishedValue("dominant frequency of the pressure drop 20 cm above the inlet",
+                   "Fig 3 (not given numerically)", "Sun et al. 2007, central jet",
+                   summary_key="pressure_20cm_dominant_frequency_Hz", unit="Hz", digits=3,
+                   window_text="power spectrum over", **_SUN_AVERAGE),
+    PublishedValue("largest contact force / drag (cell means; this run: the largest cell's, averaged over time)", "up to 100",
+                   "Sun et al. 2007 Fig 7, corners beside the jet",
+                   summary_key="contact_drag_ratio_max_avg", digits=3, when_missing="not measured; see the forces figure",
+                   **_SUN_AVERAGE),
+)
+
 PUBLISHED: dict[str, tuple[PublishedValue, ...]] = {
     # Hoomans et al. 1996 §5.1 with soft spheres: the packing compares; the energy error does not
     # (contacts dissipate by design)
@@ -126,34 +142,8 @@ PUBLISHED: dict[str, tuple[PublishedValue, ...]] = {
     # same bed with the bottom closed but for the jet) and goldschmidt.
     # Sun's numbers are means over 5-10 s; summary.json holds this run's means over that window
     # (or over the second half of a shorter run, which the table says).
-    "tsuji-jet": (
-        PublishedValue("bulk coordination number", "about 1.2", "Sun et al. 2007 Fig 5, central jet",
-                       summary_key="coordination_number_avg", **_SUN_AVERAGE),
-        PublishedValue("multicontact ratio", "above 0.6 most of the time", "Sun et al. 2007 Fig 11, central jet",
-                       summary_key="multicontact_ratio_avg", **_SUN_AVERAGE),
-        PublishedValue("dominant frequency of the pressure drop 20 cm above the inlet",
-                       "Fig 3 (not given numerically)", "Sun et al. 2007, central jet",
-                       summary_key="pressure_20cm_dominant_frequency_Hz", unit="Hz", digits=3,
-                       window_text="power spectrum over", **_SUN_AVERAGE),
-        PublishedValue("largest contact force / drag (cell means; this run: the largest cell's, averaged over time)", "up to 100",
-                       "Sun et al. 2007 Fig 7, corners beside the jet",
-                       summary_key="contact_drag_ratio_max_avg", digits=3, when_missing="not measured; see the forces figure",
-                       **_SUN_AVERAGE),
-    ),
-    "tsuji-jet-closed": (
-        PublishedValue("bulk coordination number", "about 1.2", "Sun et al. 2007 Fig 5, central jet",
-                       summary_key="coordination_number_avg", **_SUN_AVERAGE),
-        PublishedValue("multicontact ratio", "above 0.6 most of the time", "Sun et al. 2007 Fig 11, central jet",
-                       summary_key="multicontact_ratio_avg", **_SUN_AVERAGE),
-        PublishedValue("dominant frequency of the pressure drop 20 cm above the inlet",
-                       "Fig 3 (not given numerically)", "Sun et al. 2007, central jet",
-                       summary_key="pressure_20cm_dominant_frequency_Hz", unit="Hz", digits=3,
-                       window_text="power spectrum over", **_SUN_AVERAGE),
-        PublishedValue("largest contact force / drag (cell means; this run: the largest cell's, averaged over time)", "up to 100",
-                       "Sun et al. 2007 Fig 7, corners beside the jet",
-                       summary_key="contact_drag_ratio_max_avg", digits=3, when_missing="not measured; see the forces figure",
-                       **_SUN_AVERAGE),
-    ),
+    "tsuji-jet": _SUN_JET,
+    "tsuji-jet-closed": _SUN_JET,
     "goldschmidt": (
         PublishedValue("mean particle height", "8.9 cm (TF-DEM, cell-averaged drag)",
                        "Sun et al. 2007 Fig 9, uniform inflow, 5–10 s",

@@ -84,7 +84,10 @@ def cmd_cases(args) -> int:
 
 def cmd_bench(args) -> int:
     from .bench import run_bench
+    from .errors import CaseError
 
+    if not args.coupled_until > 0:
+        raise CaseError(f"bench --coupled-until = {args.coupled_until!r}: must be a positive number of simulated seconds")
     run_bench(sizes=args.sizes, threads=args.threads, steps=args.steps, as_json=args.json, gas=not args.no_gas,
               coupled=not args.no_coupled, coupled_until=args.coupled_until)
     return 0

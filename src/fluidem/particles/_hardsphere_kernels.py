@@ -392,61 +392,33 @@ def _pair_time(rx, ry, rz, vx, vy, vz, sig, t, horizon):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
-def _scan(t, xi, yi, zi, vxi, vyi, vzi, ri, best, partf, P, p0, p1, nbr, sync):
+def _scan(t, xi, yi, zi, vxi, vyi, vzi, ri, best, partf, P, p0, p1, nbr, sync, planar):
     """Earliest collision of a particle at (x, v, R)_i with its neighbours nbr[p0:p1] if before ``best``:
     returns the new (best, partner as a float). ``sync``: every particle's clock is t, so the stored positions
-    are those at t (the same numbers as moving them by zero)."""
+    are those at t (the same numbers as moving them by zero). ``planar`` (see ``_load``): the z terms, all
+    exactly zero then, are not read (the same numbers result)."""
     for p in range(p0, p1):
         j = nbr[p]
         o = P_ROW * j
         vxj = P[o + P_VX]
         vyj = P[o + P_VY]
-        vzj = P[o + P_VZ]
         vx = vxi - vxj
         vy = vyi - vyj
-        vz = vzi - vzj
         if sync:
             rx = xi - P[o + P_X]
             ry = yi - P[o + P_Y]
-            rz = zi - P[o + P_Z]
         else:
             dtj = t - P[o + P_T]
             rx = xi - (P[o + P_X] + vxj * dtj)
             ry = yi - (P[o + P_Y] + vyj * dtj)
-            rz = zi - (P[o + P_Z] + vzj * dtj)
+        if planar:
+            vz = 0.0
+            rz = 0.0
+        else:
+            vzj = P[o + P_VZ]
+            vz = vzi - vzj
+            rz = zi - P[o + P_Z] if sync else zi - (P[o + P_Z] + vzj * (t - P[o + P_T]))
         tc = _pair_time(rx, ry, rz, vx, vy, vz, ri + P[o + P_R], t, best - t)
-        better = tc < best
-        best = tc if better else best
-        partf = float(j) if better else partf
-    return best, partf
-
-
-@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
-def _scan_planar(t, xi, yi, vxi, vyi, ri, best, partf, P, p0, p1, nbr, sync):
-    """``_scan`` for planar motion: the z terms, all exactly zero there, left out (the same numbers result)."""
-    for p in range(p0, p1):
-        j = nbr[p]
-        o = P_ROW * j
-        vxj = P[o + P_VX]
-        vyj = P[o + P_VY]
-        vx = vxi - vxj
-        vy = vyi - vyj
-        if sync:
-            rx = xi - P[o + P_X]
-            ry = yi - P[o + P_Y]
-        else:
-            dtj = t - P[o + P_T]
-            rx = xi - (P[o + P_X] + vxj * dtj)
-            ry = yi - (P[o + P_Y] + vyj * dtj)
-        b = rx * vx + ry * vy
-        sig = ri + P[o + P_R]
-        c = rx * rx + ry * ry - sig * sig
-        v2 = vx * vx + vy * vy
-        disc = b * b - v2 * c
-        root = c / (-b + math.sqrt(max(disc, 0.0)))
-        hit = (b < 0.0) & ((c <= 0.0) | ((c < -2.0 * b * (best - t)) & (disc >= 0.0)))
-        tc = t if c <= 0.0 else t + root
-        tc = tc if hit else np.inf
         better = tc < best
         best = tc if better else best
         partf = float(j) if better else partf
@@ -525,12 +497,8 @@ def _predict(i, t, t_end, P, nbr_start, nbr, walls, R, half_skin, ncoll, ev, pla
     ri = P[o + P_R]
     best, partf = _wall_event(i, t, xi, yi, zi, vxi, vyi, vzi, ri, t_end, float(NO_EVENT), walls, R)
     # neighbours: Hoomans eq. 30
-    if planar:
-        best, partf = _scan_planar(t, xi, yi, vxi, vyi, ri, best, partf, P, nbr_start[i], nbr_start[i + 1], nbr,
-                                   sync)
-    else:
-        best, partf = _scan(t, xi, yi, zi, vxi, vyi, vzi, ri, best, partf, P, nbr_start[i], nbr_start[i + 1], nbr,
-                            sync)
+    best, partf = _scan(t, xi, yi, zi, vxi, vyi, vzi, ri, best, partf, P, nbr_start[i], nbr_start[i + 1], nbr,
+                        sync, planar)
     return _finish_event(i, t, xi, yi, zi, vxi, vyi, vzi, best, partf, R, half_skin, ncoll, ev)
 
 

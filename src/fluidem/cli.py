@@ -30,7 +30,7 @@ def _parse_sets(items: list[str]) -> dict:
 
 def cmd_run(args) -> int:
     from .case import load_case
-    from .simulation import Simulation
+    from .simulation import Simulation, summary_json
 
     if args.resume:
         if args.case or args.set:
@@ -70,7 +70,7 @@ def cmd_run(args) -> int:
         print(f"fluidem: run stopped at t = {sim.time:.6g} s: {err}. The last checkpoint in {out} is intact; "
               f"free the space or fix the folder, then: fluidem run --resume {out}", file=sys.stderr)
         return 1
-    print(json.dumps(summary, indent=2))
+    print(summary_json(summary), end="")
     return 0
 
 

@@ -290,11 +290,16 @@ class Simulation:
                 obs.finalize(self)
         summary = self.summary()
         if self.out_dir is not None:
-            write_text_atomic(self.out_dir / "summary.json", json.dumps(summary, indent=2) + "\n")
+            write_text_atomic(self.out_dir / "summary.json", summary_json(summary))
         return summary
 
     # ------------------------------------------------------------ results
     def summary(self) -> dict:
+        """The run's figures (``summary.json``); a quantity that is undefined (NaN, e.g. the multicontact
+        ratio of a bed with no contacts) is None (JSON null)."""
+        return _finite(self._summary())
+
+    def _summary(self) -> dict:
         eng = self.engine
         c = P.contacts(eng)
         e = P.energies(eng)
@@ -386,3 +391,19 @@ class Simulation:
         if threads is not None:
             case.threads = threads
         return cls(case, out_dir=out_dir, resume=True, progress=progress)
+
+
+def _finite(value):
+    """``value`` with every non-finite float (NaN, ±inf) inside dicts and lists replaced by None."""
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite(v) for v in value]
+    if isinstance(value, (float, np.floating)) and not math.isfinite(value):
+        return None
+    return value
+
+
+def summary_json(summary: dict) -> str:
+    """``summary`` as strict JSON text (no NaN or Infinity, which pandas, jq and browsers reject)."""
+    return json.dumps(_finite(summary), indent=2, allow_nan=False) + "\n"

@@ -33,6 +33,13 @@ def ref_hoomans(e, s):
     return np.where(e < 0.8, ergun, wenyu)
 
 
+def ref_hoomans_total(e, s):
+    """Hoomans 1996 eqs 35-39 as written: F_d = π/8 d² C_d ε^-4.7 ρ ε² |u−v|², β = F_d (1−ε)/(V_p |u−v|)."""
+    re = e * RHO * s * D / MU  # eq. 39
+    force = math.pi / 8 * D**2 * cd_rowe(re, 0.44) * e**-4.7 * RHO * e**2 * s * s  # eqs 35-38
+    return force * (1 - e) / (math.pi / 6 * D**3 * s)
+
+
 def ref_gidaspow(e, s):
     re = e * RHO * s * D / MU
     es = 1 - e
@@ -69,7 +76,7 @@ def ref_koch_hill(e, s):
     return 18 * MU * e**2 * phi / D**2 * (f0 + 0.5 * f3 * re)
 
 
-REFERENCES = {"hoomans1996": ref_hoomans, "gidaspow": ref_gidaspow, "di_felice": ref_di_felice,
+REFERENCES = {"hoomans1996": ref_hoomans, "hoomans1996_total": ref_hoomans_total, "gidaspow": ref_gidaspow, "di_felice": ref_di_felice,
               "beetstra": ref_beetstra, "koch_hill": ref_koch_hill}
 
 
@@ -203,3 +210,46 @@ def test_registry_and_schema_errors():
         DiFelice(exponent=3.7)
     with pytest.raises(ValueError, match="voidage"):
         Gidaspow().beta(0.0, 1.0, D, RHO, MU)
+
+
+def test_hoomans_total_takes_the_gas_side_of_eqs_45_47():
+    """hoomans1996_total: the particles take eqs 35-39, the gas's cell β is hoomans1996 (eqs 45-47);
+    every other law's gas side is its own."""
+    assert drag_laws.get("hoomans1996_total").cell_code() == Hoomans1996.code
+    assert isinstance(drag_laws.get("hoomans1996_total")().gas_side(), Hoomans1996)
+    assert drag_laws.get("hoomans1996_total").total_force
+    for name in drag_laws.names():
+        if name != "hoomans1996_total":
+            law = drag_laws.get(name)
+            assert law.cell_code() == law.code and not law.total_force
+
+
+def test_hoomans_total_supports_a_4mm_aluminium_bed_near_wen_yu_umf():
+    """Eq. 35 alone carries the particle (eq. 34): at ε = 0.4 the superficial velocity at which it equals
+    m g for Hoomans' 4 mm aluminium spheres is 1.637 m/s (brentq), 7.5 % below the 1.77 m/s Table 2 gives
+    (Wen & Yu's correlation); Ergun's pressure gradient at ε = 0.4 carries the bed at 1.703 m/s."""
+    from scipy.optimize import brentq
+
+    law = drag_laws.get("hoomans1996_total")()
+    d, rho_p, g, eps = 4e-3, 2700.0, 9.81, 0.4
+    m = rho_p * math.pi / 6 * d**3
+
+    def excess(superficial):
+        return law.force_coefficient(eps, superficial / eps, d, RHO, MU) * superficial / eps - m * g
+
+    u = brentq(excess, 0.1, 10.0, xtol=1e-10)
+    assert u == pytest.approx(1.637, abs=0.001)
+
+
+def test_total_force_law_needs_no_pressure_force_and_the_cell_beta_exchange():
+    from fluidem.case import load_case
+    from fluidem.errors import CaseError
+
+    base = {"coupling.drag": "hoomans1996_total", "coupling.pressure_gradient_force": False,
+            "coupling.momentum_exchange": "cell_beta"}
+    assert load_case("tsuji-jet", base).coupling.drag == "hoomans1996_total"
+    with pytest.raises(CaseError, match="set pressure_gradient_force = false"):
+        load_case("tsuji-jet", {**base, "coupling.pressure_gradient_force": True})
+    for exchange in ("particle", "cell"):
+        with pytest.raises(CaseError, match=f"momentum_exchange must be 'cell_beta'.*got '{exchange}'"):
+            load_case("tsuji-jet", {**base, "coupling.momentum_exchange": exchange})

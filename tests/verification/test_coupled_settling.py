@@ -59,15 +59,17 @@ def terminal_velocity(drag, rho_g, buoyancy):
     return brentq(balance, 1e-6, 10.0, xtol=1e-12)
 
 
-@pytest.mark.parametrize("drag,density,pgf,update", [
-    ("hoomans1996", 1.2, True, "frozen"),
-    ("hoomans1996", 1.2, False, "frozen"),
-    ("di_felice", None, True, "frozen"),
-    ("di_felice", 1.2, True, "substep"),
+@pytest.mark.parametrize("drag,density,pgf,update,exchange", [
+    ("hoomans1996", 1.2, True, "frozen", "particle"),
+    ("hoomans1996", 1.2, False, "frozen", "particle"),
+    ("di_felice", None, True, "frozen", "particle"),
+    ("di_felice", 1.2, True, "substep", "particle"),
+    # Hoomans' own model: total force of eqs 35-39, no buoyancy (eq. 34), the gas on β of eqs 45-47
+    ("hoomans1996_total", 1.2, False, "substep", "cell_beta"),
 ])
-def test_lone_particle_reaches_the_terminal_velocity_of_its_drag_law(drag, density, pgf, update):
+def test_lone_particle_reaches_the_terminal_velocity_of_its_drag_law(drag, density, pgf, update, exchange):
     end = 0.4 if update == "frozen" else 0.3
-    case = validate_case(settling_case(drag, density, pgf, end=end, drag_update=update))
+    case = validate_case(settling_case(drag, density, pgf, end=end, drag_update=update, momentum_exchange=exchange))
     sim = Simulation(case)
     sim.step_once(int(round(end / sim.dt)))
     rho_g = float(sim.gas.state.rho.mean())

@@ -125,7 +125,7 @@ class GasCoupling:
                              f"got {', '.join(str(f.shape) for f in fields)}")
         self._check_gas()
         beta = np.empty(gd.shape)
-        bad = K.cell_beta(self.drag.code, st.position, st.radius, self.volume, gs.u, gs.v, gs.rho, *fields,
+        bad = K.cell_beta(self.drag.cell_code(), st.position, st.radius, self.volume, gs.u, gs.v, gs.rho, *fields,
                           self.solver.props.viscosity, gd.dx, gd.dy, gd.cell_volume, beta)
         if bad:
             raise ValueError(f"cell β: drag arguments out of range for {bad} particles "

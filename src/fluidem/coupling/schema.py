@@ -10,6 +10,9 @@ cell-averaged drag β V_cell (u − v_s), shared by the particles of the cell in
 their volume, the gas receiving its opposite; ``"cell_beta"`` the gas takes β of the
 cell-averaged slip while each particle takes its own drag — as MFIX in Sun 2007 (the
 assumption after eq. 35), not equal and opposite; kept to compare with it.
+``hoomans1996_total`` (Hoomans 1996 eqs 35-39 on the particles, eqs 45-47 for the gas) is his
+own formulation: it requires ``pressure_gradient_force = false`` and ``momentum_exchange =
+"cell_beta"`` (checked here).
 ``drag_update`` says when the particle drag is re-evaluated (the issue's "re-evaluated every
 sub-step with the gas frozen (default) or held for the whole DT"): ``"substep"`` (default) every
 DEM sub-step in the gas field of that DT — for the "particle" exchange with its drag coefficient
@@ -33,7 +36,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from .drag import DragLaw, drag_laws
 from .voidage import VoidageMapping
@@ -59,6 +62,20 @@ class CouplingSection(BaseModel):
         if v not in drag_laws:
             raise ValueError(f"unknown drag law {v!r}; allowed: {', '.join(drag_laws.names())}")
         return v
+
+    @model_validator(mode="after")
+    def _total_force_alone(self):
+        """A law giving the total gas force (``hoomans1996_total``) already holds the pressure part."""
+        if drag_laws.get(self.drag).total_force:
+            if self.pressure_gradient_force:
+                raise ValueError(f"drag = {self.drag!r} gives the total gas force on a particle (Hoomans 1996 "
+                                 "eqs 34-35, pressure part included): set pressure_gradient_force = false "
+                                 "(got true)")
+            if self.momentum_exchange != "cell_beta":
+                raise ValueError(f"drag = {self.drag!r} gives the total gas force on a particle, which the gas "
+                                 f"(−ε∇p) cannot take back as its opposite: momentum_exchange must be 'cell_beta' "
+                                 f"(the gas takes β of Hoomans eqs 45-47 per cell), got {self.momentum_exchange!r}")
+        return self
 
     def drag_law(self) -> DragLaw:
         return drag_laws.get(self.drag)()

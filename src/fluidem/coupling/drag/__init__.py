@@ -10,5 +10,6 @@ from .gidaspow import Gidaspow
 from .di_felice import DiFelice
 from .beetstra import Beetstra
 from .koch_hill import KochHill
+from .hoomans1996_total import Hoomans1996Total
 
-__all__ = ["DragLaw", "drag_laws", "Hoomans1996", "Gidaspow", "DiFelice", "Beetstra", "KochHill"]
+__all__ = ["DragLaw", "drag_laws", "Hoomans1996", "Gidaspow", "DiFelice", "Beetstra", "KochHill", "Hoomans1996Total"]

@@ -1,11 +1,12 @@
 """Compiled dispatch over drag laws by integer code (one branch per closure).
 
-Codes: 1 hoomans1996, 2 gidaspow, 3 di_felice, 4 beetstra, 5 koch_hill (each file's ``CODE``).
+Codes: 1 hoomans1996, 2 gidaspow, 3 di_felice, 4 beetstra, 5 koch_hill, 6 hoomans1996_total
+(each file's ``CODE``).
 All return β/(1 − ε) [kg m^-3 s^-1]; multiply by (1 − ε) for β per bed volume.
 """
 from numba import njit
 
-from . import beetstra, di_felice, gidaspow, hoomans1996, koch_hill
+from . import beetstra, di_felice, gidaspow, hoomans1996, hoomans1996_total, koch_hill
 
 
 @njit(cache=True, error_model="numpy")
@@ -21,6 +22,8 @@ def beta_per_solids(code, eps, slip, d, rho, mu, y):
         return beetstra.beta_per_solids(eps, slip, d, rho, mu, y)
     if code == koch_hill.CODE:
         return koch_hill.beta_per_solids(eps, slip, d, rho, mu, y)
+    if code == hoomans1996_total.CODE:
+        return hoomans1996_total.beta_per_solids(eps, slip, d, rho, mu, y)
     return 0.0
 
 

@@ -7,8 +7,11 @@ eq. 43, Sun 2007 eqs 30 and 33). The drag force on one particle of volume V_p is
     F = β V_p / (1 − ε) (u − v)                     (Sun 2007 eqs 28-29: ε f_d = β V_p/ε_s (u − v))
 
 which is the drag *without* the −V_p ∇p term; in a homogeneous bed that term adds
-F (1 − ε)/ε, so the total gas force is F/ε = β V_p/(ε(1 − ε)) (u − v), Hoomans 1996 eq. 35
-(whose F_d is the total force because his eq. 34 has no pressure-gradient term).
+F (1 − ε)/ε, so the total gas force is F/ε = β V_p/(ε(1 − ε)) (u − v), the form of Hoomans
+1996 eq. 35 (whose F_d is the total force because his eq. 34 has no pressure-gradient term).
+Hoomans' own particle force is not that of his gas-side β (eqs 45-47, ``hoomans1996``) but
+Wen & Yu's C_d ε^-4.7 at every voidage: ``hoomans1996_total`` (``total_force = True``, its
+gas side named by ``gas_code``), used without −V_p ∇p and with the "cell_beta" exchange.
 
 Because β ∝ (1 − ε) in every closure, the kernels compute β/(1 − ε) [kg m^-3 s^-1 per
 unit solids volume] and the force coefficient β V_p/(1 − ε) stays finite for a lone
@@ -35,9 +38,26 @@ class DragLaw(BaseModel):
 
     code: ClassVar[int] = 0
     stokes_limit: ClassVar[bool] = True  # β V_p/(1-ε) -> 3π μ d as ε -> 1, Re -> 0
+    # The β the gas takes from a cell's voidage and mean solids velocity ("cell", "cell_beta" exchanges):
+    # None = this law's own; a law whose particle force differs from its gas-side β names the gas code.
+    gas_code: ClassVar[int | None] = None
+    # True: the particle force is the total gas force (pressure part included, Hoomans 1996 eq. 34-35),
+    # to be used without −V_p ∇p and with the "cell_beta" exchange (coupling/schema.py checks it)
+    total_force: ClassVar[bool] = False
+
+    @classmethod
+    def cell_code(cls) -> int:
+        """Code of the β the gas takes per cell (``gas_code``, else ``code``)."""
+        return cls.code if cls.gas_code is None else cls.gas_code
+
+    def gas_side(self) -> "DragLaw":
+        """The law whose β the gas takes per cell: this one, or the registered law of ``gas_code``."""
+        if self.gas_code is None or self.gas_code == self.code:
+            return self
+        return next(drag_laws.get(n)() for n in drag_laws.names() if drag_laws.get(n).code == self.gas_code)
 
     def beta(self, voidage, slip_speed, diameter, gas_density, gas_viscosity, y_ratio=1.0) -> np.ndarray:
-        """β [kg m^-3 s^-1] per unit bed volume; arguments broadcast against each other.
+        """β [kg m^-3 s^-1] per unit bed volume of the particle force; arguments broadcast against each other.
 
         voidage ε [-] in (0, 1], slip_speed |u − v| [m/s], diameter d [m],
         gas_density ρ_g [kg/m^3], gas_viscosity μ_g [Pa s], y_ratio d_i/D̄ [-]

@@ -14,6 +14,11 @@ coupled     The built-in ``tsuji-jet`` case (Sun 2007: 2400 soft spheres, 15 × 
             ms per gas step split into DEM, gas solve, map, deposit, forces and the rest, and
             the wall time that 20 s at this pace would take (the case's length; the issue's
             target is 3 minutes on 2 cores).
+hard spheres The built-in ``hoomans-orifice`` case (Hoomans 1996 Table 2: 2400 hard spheres, 15 × 25
+            gas cells, DT = 1e-4 s) including the gas: its 0.5 s start-up at the u_mf background is run
+            untimed (``hard_warmup``), then ``hard_until`` seconds of the 45 m/s jet are timed:
+            collisions per second of the whole run and of the engine alone (the issue's target:
+            2e6 per second on one core), collisions and milliseconds per step. The engine is serial.
 gas step    One gas-phase step on the 15 × 25, 39 × 60 and 150 × 300 grids
             (``fluidem.gas.gas_step_benchmark``: Hoomans 1996 orifice bed), with the
             pressure-correction solver ``gas_linear_solver`` ("auto", or e.g. "pyamg"; for
@@ -227,9 +232,28 @@ def time_coupled(case_name: str = "tsuji-jet", until: float = 0.25, warmup: floa
             "minutes_for_20_s": per_step * round(20.0 / sim.gas.gas_dt) / 60.0}
 
 
+def time_hard_sphere(case_name: str = "hoomans-orifice", warmup: float = 0.5, until: float = 0.1) -> dict:
+    """Collisions per second of a coupled hard-sphere case over ``until`` simulated seconds after ``warmup``."""
+    from .case import load_case
+    from .simulation import Simulation
+
+    sim = Simulation(load_case(case_name))
+    sim.run(until=warmup)  # compiles (or loads the caches); the start-up is not timed
+    eng = sim.engine
+    t_start, c0, s0 = sim.time, eng.collisions, eng.steps
+    parts = profile_coupled(sim, t_start + until)
+    coll, steps = eng.collisions - c0, max(eng.steps - s0, 1)
+    return {"problem": f"hard spheres {case_name}", "n_particles": sim.state.n, "threads": 1,
+            "sim_seconds": sim.time - t_start, "wall_s": parts["total"], "steps": eng.steps - s0,
+            "collisions": coll, "collisions_per_step": coll / steps,
+            "collisions_per_s": coll / parts["total"], "engine_collisions_per_s": coll / parts["DEM"],
+            "ms_per_step": 1e3 * parts["total"] / steps, "engine_ms_per_step": 1e3 * parts["DEM"] / steps}
+
+
 def run_bench(sizes="10000,100000", threads="1,2", steps: int = 0, as_json: str | None = None,
               gas: bool = True, gas_linear_solver: str = "auto", coupled: bool = True,
-              coupled_until: float = 0.25) -> list[dict]:
+              coupled_until: float = 0.25, hard_sphere: bool = True, hard_warmup: float = 0.5,
+              hard_until: float = 0.1) -> list[dict]:
     import numba
 
     from .analysis.probes import contacts
@@ -268,6 +292,14 @@ def run_bench(sizes="10000,100000", threads="1,2", steps: int = 0, as_json: str 
                   f"{r['minutes_for_20_s']:8.1f} min", flush=True)
             print("    ms per gas step: " + ", ".join(f"{k} {v:.3f}" for k, v in r["ms_per_gas_step_parts"].items()
                                                      if k != "beta" or v > 0), flush=True)
+    if hard_sphere:
+        r = time_hard_sphere("hoomans-orifice", warmup=hard_warmup, until=hard_until)
+        rows.append(r)
+        print(f"\n{'hard spheres (gas included)':28s} {'N':>6s} {'sim s':>6s} {'wall s':>7s} {'coll/step':>9s} "
+              f"{'collisions/s':>13s} {'engine coll/s':>13s} {'ms/step':>8s} {'engine ms':>9s}")
+        print(f"{r['problem']:28s} {r['n_particles']:6d} {r['sim_seconds']:6.2f} {r['wall_s']:7.2f} "
+              f"{r['collisions_per_step']:9.0f} {r['collisions_per_s']:13.3e} {r['engine_collisions_per_s']:13.3e} "
+              f"{r['ms_per_step']:8.3f} {r['engine_ms_per_step']:9.3f}", flush=True)
     if gas:
         from .gas import gas_step_benchmark
 

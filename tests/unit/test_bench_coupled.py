@@ -23,3 +23,22 @@ def test_bench_refuses_a_coupled_window_that_is_not_positive(capsys):
 
     assert main(["bench", "--sizes", "", "--no-gas", "--coupled-until", "0"]) == 2
     assert "--coupled-until = 0.0: must be a positive number" in capsys.readouterr().err
+
+
+def test_hard_sphere_timing_row():
+    """The hoomans-orifice row: collisions counted over the timed window, rates from the measured times."""
+    from fluidem.bench import time_hard_sphere
+
+    r = time_hard_sphere("hoomans-orifice", warmup=0.002, until=0.003)
+    assert r["steps"] == 30 and r["n_particles"] == 2400 and r["threads"] == 1
+    assert r["collisions"] >= 0 and math.isclose(r["collisions_per_step"], r["collisions"] / 30, rel_tol=1e-12)
+    assert 0.0 < r["engine_ms_per_step"] < r["ms_per_step"]  # the engine is a part of the whole step
+    assert math.isclose(r["collisions_per_s"], r["collisions"] / r["wall_s"], rel_tol=1e-12)
+    assert r["engine_collisions_per_s"] >= r["collisions_per_s"]
+
+
+def test_bench_refuses_a_hard_sphere_window_that_is_not_positive(capsys):
+    from fluidem.cli import main
+
+    assert main(["bench", "--sizes", "", "--no-gas", "--no-coupled", "--hard-until", "-1"]) == 2
+    assert "--hard-until = -1.0: must be a positive number" in capsys.readouterr().err

@@ -1,6 +1,8 @@
 """Where the weight of the u_mf-sweep bed goes when fluidised (diagnostic for test_umf_sweep.py).
 
-The sweep case held at 0.4 m/s (2.1 u_mf) after settling; over 0.35-0.65 s it prints the
+The sweep case held at 0.4 m/s (2.1 u_mf) after settling, in the sweep's first, smaller bed
+(2000 spheres, 20 × 5 diameters, 5 × 15 cells: the figures quoted in test_umf_sweep.py; the
+test itself now sweeps a 60 × 10 d bed); over 0.35-0.65 s it prints the
 bed pressure drop over W/A and the gas force on the particles (drag + −V_p∇p) over their
 weight m g; the difference from 1 is what rests on the bottom wall.
 
@@ -21,6 +23,7 @@ from fluidem.simulation import Simulation  # noqa: E402
 
 
 def main(eps_in=1.0, exchange="particle", u=0.4, end=0.65, start=0.35):
+    T.N, T.W, T.DEPTH = 2000, 20 * T.D, 5 * T.D  # the 20 x 5 d bed (5 x 15 cells of 4 d)
     c = T.sweep_case().model_dump(mode="json", exclude_none=True)
     bottom = c["gas"]["boundaries"]["bottom"]
     bottom["voidage"] = eps_in

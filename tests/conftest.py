@@ -14,6 +14,8 @@ make_case(pos, diam, ...)          validated ``Case`` with the particles from a 
 make_engine(pos, diam, ...)        ``SoftSphereEngine`` of that case (optionally with initial spins)
 two_particles(overlap=..., ...)    engine of two spheres along x, overlapping by ``overlap`` [m]
 tiny_bed_case(...)                 case of a small 3D bed dropped from a lattice into a box
+stopped_and_resumed(case, stop)    (whole, first, again): the case run in one go; run to ``stop`` with a
+                                   run directory; and resumed from that directory's checkpoint to the end
 """
 from __future__ import annotations
 
@@ -198,6 +200,24 @@ def tiny_bed_case(tmp_path):
         return validate_case(data)
 
     return _make
+
+
+@pytest.fixture
+def stopped_and_resumed(tmp_path):
+    """Factory: a run made in one go, the same run stopped at ``stop`` (checkpoint in tmp_path/"run") and
+    the one resumed from it with ``Simulation.resume``, each run to the case's end: (whole, first, again)."""
+    from fluidem.simulation import Simulation
+
+    def make(case, stop):
+        whole = Simulation(case)
+        whole.run()
+        first = Simulation(case, out_dir=tmp_path / "run")
+        first.run(until=stop)
+        again = Simulation.resume(tmp_path / "run")
+        again.run()
+        return whole, first, again
+
+    return make
 
 
 @pytest.fixture(scope="session")

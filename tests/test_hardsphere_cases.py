@@ -84,18 +84,13 @@ def test_table2_cases_start_at_umf_and_switch_the_jet_on_at_t0(name, jet):
         assert np.allclose(v, expected), (t, v)
 
 
-def test_coupled_hard_sphere_run_resumes(tmp_path):
+def test_coupled_hard_sphere_run_resumes(stopped_and_resumed):
     """hoomans-orifice (Hoomans' own coupling: cell_beta exchange, no −V_p∇p) stopped at a checkpoint and
     resumed matches the run made in one go, to the gas solver's tolerance (a resumed solver refactorises
     its pressure matrix: tests/verification/test_coupled_restart.py)."""
     case = load_case("hoomans-orifice", {"time.end": 0.02, "output.checkpoint_interval": 0.01,
                                          "output.snapshot_interval": 0.01, "output.probe_interval": 0.005})
-    whole = Simulation(case)
-    whole.run()
-    first = Simulation(case, out_dir=tmp_path / "run")
-    first.run(until=0.01)
-    again = Simulation.resume(tmp_path / "run")
-    again.run()
+    whole, _, again = stopped_and_resumed(case, 0.01)
     assert again.step == whole.step == 200
     assert again.engine.collisions == whole.engine.collisions > 0
     np.testing.assert_allclose(again.state.position, whole.state.position, rtol=0, atol=1e-12)

@@ -5,19 +5,13 @@ older one (``jacobian_reuse``), so the two agree to the gas tolerance, not to th
 import numpy as np
 
 from fluidem.case import validate_case
-from fluidem.simulation import Simulation
 from test_coupled_settling import settling_case
 
 
-def test_resumed_coupled_run_matches_the_uninterrupted_one(tmp_path):
+def test_resumed_coupled_run_matches_the_uninterrupted_one(stopped_and_resumed):
     case = validate_case(settling_case(end=0.02))
-    whole = Simulation(case)
-    whole.run()
-    first = Simulation(case, out_dir=tmp_path / "run")
-    first.run(until=0.0105)  # stops inside a gas step (DT = 1 ms)
+    whole, first, again = stopped_and_resumed(case, 0.0105)  # stops inside a gas step (DT = 1 ms)
     assert first.step % first.gas.substeps != 0
-    again = Simulation.resume(tmp_path / "run")
-    again.run()
     assert again.step == whole.step
     np.testing.assert_allclose(again.state.position, whole.state.position, rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(again.state.velocity, whole.state.velocity, rtol=1e-6, atol=1e-12)

@@ -129,14 +129,9 @@ def test_simulation_runs_a_hard_sphere_pour_end_to_end(tmp_path):
     assert eng.collisions > 0
 
 
-def test_resumed_hard_sphere_run_is_bit_for_bit(tmp_path):
+def test_resumed_hard_sphere_run_is_bit_for_bit(stopped_and_resumed):
     case = pour_case(1e-4, **{"time.end": 0.14, "output.checkpoint_interval": 0.02})
-    whole = Simulation(case)
-    whole.run()
-    first = Simulation(case, out_dir=tmp_path / "run")
-    first.run(until=0.1)
-    again = Simulation.resume(tmp_path / "run")
-    again.run()
+    whole, _, again = stopped_and_resumed(case, 0.1)
     assert again.step == whole.step == 1400
     assert again.engine.collisions == whole.engine.collisions > 10_000
     for k in ("position", "velocity", "omega"):

@@ -105,6 +105,8 @@ PEAK_RATIO = 2.0
 # "A bubble is formed at the orifice": the first bubble reaches down into the lowest two cell
 # rows (4 cm, ten particle diameters) of the orifice column, i.e. it sits on the jet.
 ORIFICE_ROWS = 2
+# Three realisations of each set-up: the case's lattice perturbation (seed 1996) and two others.
+SEEDS = (1996, 1, 2)
 
 
 @dataclass
@@ -186,29 +188,59 @@ def run_bed(tmp_path_factory, case: str, label: str, extra=()) -> Bed:
     return bed
 
 
+@dataclass
+class Beds:
+    """Realisations of one set-up that differ only in the lattice perturbation (placement seeds ``SEEDS``).
+
+    Each run is chaotic, so one realisation's bubble sizes and pressure swings move by tens of percent
+    with round-off; statements about every run ("no bubble", "slugs") are checked on each, and the
+    contrasts between particle kinds (largest bubble, pressure fluctuations) on the means over the runs.
+    """
+
+    label: str
+    runs: list
+
+    def pressure_stats(self) -> tuple[float, float]:
+        """Means over the runs of (standard deviation, peak-to-peak) [Pa] of the gauge pressure from T0."""
+        stats = np.array([b.pressure_stats() for b in self.runs])
+        return float(stats[:, 0].mean()), float(stats[:, 1].mean())
+
+    def largest_bubble(self) -> float:
+        """Mean over the runs of the largest bubble [m²] from T0."""
+        return float(np.mean([b.area[b.settled()].max() for b in self.runs]))
+
+    def describe(self) -> str:
+        return "\n".join(b.describe() for b in self.runs)
+
+
+def run_beds(tmp_path_factory, case: str, label: str, extra=()) -> Beds:
+    return Beds(label, [run_bed(tmp_path_factory, case, f"{label}-seed{seed}",
+                                (*extra, "--set", f"particles.placement.seed={seed}")) for seed in SEEDS])
+
+
 @pytest.fixture(scope="module")
 def orifice(tmp_path_factory):
-    return run_bed(tmp_path_factory, "hoomans-orifice", "orifice-nonideal")
+    return run_beds(tmp_path_factory, "hoomans-orifice", "orifice-nonideal")
 
 
 @pytest.fixture(scope="module")
 def orifice_ideal(tmp_path_factory):
-    return run_bed(tmp_path_factory, "hoomans-orifice", "orifice-ideal", IDEAL)
+    return run_beds(tmp_path_factory, "hoomans-orifice", "orifice-ideal", IDEAL)
 
 
 @pytest.fixture(scope="module")
 def slug(tmp_path_factory):
-    return run_bed(tmp_path_factory, "hoomans-slug", "slug-nonideal")
+    return run_beds(tmp_path_factory, "hoomans-slug", "slug-nonideal")
 
 
 @pytest.fixture(scope="module")
 def slug_ideal(tmp_path_factory):
-    return run_bed(tmp_path_factory, "hoomans-slug", "slug-ideal", IDEAL)
+    return run_beds(tmp_path_factory, "hoomans-slug", "slug-ideal", IDEAL)
 
 
 @pytest.fixture(scope="module")
 def tsuji(tmp_path_factory):
-    return run_bed(tmp_path_factory, "hoomans-tsuji", "tsuji")
+    return run_beds(tmp_path_factory, "hoomans-tsuji", "tsuji")
 
 
 # §5.3.1, Figs 10-11: single orifice at 10 u_mf
@@ -220,16 +252,18 @@ def tsuji(tmp_path_factory):
     "up), not in the lowest 2, and is already a slug; slugs in 78 of 101 snapshots, largest bubble 282 cm2; "
     "Hoomans Fig 10 a, c: a bubble forms at the orifice and turns into a slug"))
 def test_orifice_nonideal_bubble_forms_at_the_orifice_and_grows_into_a_slug(orifice):
-    late = orifice.settled()
-    bubbles = np.flatnonzero(late & (orifice.area > 0))
-    assert bubbles.size, orifice.describe()
-    k0 = bubbles[0]
-    rows = np.flatnonzero(orifice.first_bubble[orifice.orifice_column])
-    assert rows.size and rows[0] < ORIFICE_ROWS, \
-        f"first bubble (T0{orifice.time[k0] - T0:+.2f} s) not on the orifice: orifice-column rows {rows.tolist()}"
-    assert not orifice.slug[k0], "the first bubble is already a slug"
-    assert (late & orifice.slug).any(), orifice.describe()
-    assert orifice.time[np.flatnonzero(late & orifice.slug)[0]] > orifice.time[k0]
+    for bed in orifice.runs:
+        late = bed.settled()
+        bubbles = np.flatnonzero(late & (bed.area > 0))
+        assert bubbles.size, bed.describe()
+        k0 = bubbles[0]
+        rows = np.flatnonzero(bed.first_bubble[bed.orifice_column])
+        assert rows.size and rows[0] < ORIFICE_ROWS, \
+            f"{bed.label}: first bubble (T0{bed.time[k0] - T0:+.2f} s) not on the orifice: orifice-column rows " \
+            f"{rows.tolist()}"
+        assert not bed.slug[k0], f"{bed.label}: the first bubble is already a slug"
+        assert (late & bed.slug).any(), bed.describe()
+        assert bed.time[np.flatnonzero(late & bed.slug)[0]] > bed.time[k0]
 
 
 @pytest.mark.xfail(strict=True, reason=(
@@ -237,15 +271,15 @@ def test_orifice_nonideal_bubble_forms_at_the_orifice_and_grows_into_a_slug(orif
     "0.8, >= 3 cells) at T0+0.06 to T0+0.60 s (34 snapshots), up to 36 cm2 at T0+0.20 s, no slug; Hoomans Fig 10 "
     "b, d: no bubble formation (the non-ideal run here: 282 cm2 and slugs)"))
 def test_orifice_ideal_forms_no_bubble(orifice_ideal):
-    assert not (orifice_ideal.area[orifice_ideal.settled()] > 0).any(), orifice_ideal.describe()
+    for bed in orifice_ideal.runs:
+        assert not (bed.area[bed.settled()] > 0).any(), bed.describe()
 
 
 def test_orifice_ideal_bubbles_are_far_smaller_than_nonideal(orifice, orifice_ideal):
     """The contrast of Fig 10 read relatively (the absolute reading, no bubble, is the xfail above): from the
     jet onset on the non-ideal bed's largest bubble is at least PEAK_RATIO times the ideal bed's (measured
     282 against 36 cm2, 7.8x)."""
-    late, late_i = orifice.settled(), orifice_ideal.settled()
-    assert orifice.area[late].max() >= PEAK_RATIO * orifice_ideal.area[late_i].max(), \
+    assert orifice.largest_bubble() >= PEAK_RATIO * orifice_ideal.largest_bubble(), \
         f"{orifice.describe()}\n{orifice_ideal.describe()}"
 
 
@@ -265,21 +299,24 @@ def test_orifice_pressure_peaks_stronger_for_nonideal_particles(orifice, orifice
 
 
 def test_slug_case_nonideal_particles_slug(slug):
-    assert slug.slug[slug.settled()].any(), slug.describe()
+    for bed in slug.runs:
+        assert bed.slug[bed.settled()].any(), bed.describe()
 
 
 @pytest.mark.xfail(strict=True, reason=(
     "ideal particles: after the inflow steps from 4.5 to 7.5 m/s at T0, slugs at T0+0.20 to T0+0.40 s (16 of "
     "101 snapshots, widest 1.00 of the column); Hoomans Fig 12 b, d: no slugging at all"))
 def test_slug_case_ideal_particles_never_slug(slug_ideal):
-    assert not slug_ideal.slug[slug_ideal.settled()].any(), slug_ideal.describe()
+    for bed in slug_ideal.runs:
+        assert not bed.slug[bed.settled()].any(), bed.describe()
 
 
 @pytest.mark.xfail(strict=True, reason=(
     "ideal particles at 1.75 u_mf: from T0 bubbles (eps > 0.8, >= 3 cells) at T0+0.13 to T0+0.92 s (45 "
     "snapshots), up to 128 cm2 at T0+0.31 s, slugs at T0+0.20-0.40 s; Hoomans Fig 12 b, d: homogeneous expansion"))
 def test_slug_case_ideal_bed_expands_homogeneously(slug_ideal):
-    assert not (slug_ideal.area[slug_ideal.settled()] > 0).any(), slug_ideal.describe()
+    for bed in slug_ideal.runs:
+        assert not (bed.area[bed.settled()] > 0).any(), bed.describe()
 
 
 def test_slug_case_pressure_peaks_stronger_for_nonideal_particles(slug, slug_ideal):
@@ -299,4 +336,5 @@ def test_slug_case_pressure_peaks_stronger_for_nonideal_particles(slug, slug_ide
     "in 10 at T0-T0+0.09 s; Hoomans §5.2 (and his experiment with 4 mm glass beads): no bubble formation, only "
     "a slightly raised porosity above the jet"))
 def test_tsuji_jet_forms_no_bubble(tsuji):
-    assert not (tsuji.area[tsuji.settled()] > 0).any(), tsuji.describe()
+    for bed in tsuji.runs:
+        assert not (bed.area[bed.settled()] > 0).any(), bed.describe()

@@ -19,6 +19,7 @@ unit bed area (``python`` runs of this module's case with other W, DEPTH, N):
   20 d wide, 5 d deep, 2000 spheres:   u_mf 0.233 m/s (+24 %), plateau −3.8 %
   60 d wide, 5 d deep, 6000 spheres:   u_mf 0.222 m/s (+18 %), plateau −2.7 %
   60 d wide, 10 d deep, 12000 spheres: u_mf 0.202 m/s (+7.3 %), plateau −4.6 %  (this test)
+  the same with inflow voidage 0.4 (Hoomans' distributor): u_mf 0.203 m/s (+7.8 %), plateau −5.7 %
 (Ergun's u_mf for these spheres: 0.196 m/s at ε = 0.39, 0.213 at 0.40, 0.249 at 0.42.)
 
 The plateau stays 3-5 % below W/A in every bed. Held at 0.4 m/s (2.1 u_mf) over

@@ -338,8 +338,7 @@ class Simulation:
             out["pressure_drop_bed_Pa"] = F.pressure_drop(self.gas.grid, self.gas.state.p,
                                                           self.gas.grid.y_centres[-1] + 0.5 * self.gas.grid.dy)
             if not P.is_hard_sphere(eng):  # Sun 2007 Figs 7/12: cell contact force over gas force, end state
-                r = F.largest_force_ratio(self.gas.grid, eng)
-                out["contact_drag_ratio_max"] = r if math.isfinite(r) else None
+                out["contact_drag_ratio_max"] = F.largest_force_ratio(self.gas.grid, eng)  # NaN → null below
             if self.out_dir is not None:
                 out.update(F.time_averages(self.out_dir / "probes.csv", self.time))
         out.update(self._summary_extra)

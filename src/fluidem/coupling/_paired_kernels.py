@@ -216,6 +216,27 @@ def _face_coefficients(A, B, vol, beta, solids):
             solids[i, j] = B[i, j] / a if a > 0.0 else 0.0
 
 
+@njit(cache=True, inline="always")
+def _gas_at(x, y, u, v, p, idx, idy, nx, ny, px, py, velocity, pressure):
+    """Gas velocity (u, v) and ∇p at (x, y), interpolated with the weights of ``deposit`` (the velocity
+    from its faces, ∇p by ``_gradient_at``); 0.0 for what is not asked (``velocity``, ``pressure``)."""
+    ci0, ci1, cw0, cw1 = _centre_axis(x, idx, nx, px)
+    fi0, fi1, fw0, fw1 = _face_axis(x, idx, nx, px)
+    cj0, cj1, cv0, cv1 = _centre_axis(y, idy, ny, py)
+    fj0, fj1, fv0, fv1 = _face_axis(y, idy, ny, py)
+    ug = 0.0
+    vg = 0.0
+    gx = 0.0
+    gy = 0.0
+    if velocity:
+        ug = _mean(u, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1)
+        vg = _mean(v, ci0, ci1, cw0, cw1, fj0, fj1, fv0, fv1)
+    if pressure:
+        gx, gy = _gradient_at(p, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, ci0, ci1, cw0, cw1, fj0, fj1, fv0, fv1,
+                              nx, ny, idx, idy, px, py)
+    return ug, vg, gx, gy
+
+
 @njit(cache=True, error_model="numpy")
 def particle_forces(position, velocity, volume, kp, u, v, p, dx, dy, px, py, pressure_force, dim2, out, total):
     """out[q] = K_q (u_q − v_q) − V_q ∇p_q [N] (Sun 2007 eqs 28-29) with the weights of ``deposit``.
@@ -229,19 +250,13 @@ def particle_forces(position, velocity, volume, kp, u, v, p, dx, dy, px, py, pre
     three = velocity.shape[1] > 2
     follow = total.shape[0] > 0
     for q in range(position.shape[0]):
-        x = position[q, 0]
-        y = position[q, 1]
-        ci0, ci1, cw0, cw1 = _centre_axis(x, idx, nx, px)
-        fi0, fi1, fw0, fw1 = _face_axis(x, idx, nx, px)
-        cj0, cj1, cv0, cv1 = _centre_axis(y, idy, ny, py)
-        fj0, fj1, fv0, fv1 = _face_axis(y, idy, ny, py)
+        ug, vg, gx, gy = _gas_at(position[q, 0], position[q, 1], u, v, p, idx, idy, nx, ny, px, py, True,
+                                 pressure_force)
         k = kp[q]
-        fx = k * (_mean(u, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1) - velocity[q, 0])
-        fy = k * (_mean(v, ci0, ci1, cw0, cw1, fj0, fj1, fv0, fv1) - velocity[q, 1])
+        fx = k * (ug - velocity[q, 0])
+        fy = k * (vg - velocity[q, 1])
         fz = -k * velocity[q, 2] if three else 0.0
         if pressure_force:  # −V_p ∇p, Sun eq. 28
-            gx, gy = _gradient_at(p, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, ci0, ci1, cw0, cw1, fj0, fj1, fv0, fv1,
-                                  nx, ny, idx, idy, px, py)
             fx -= volume[q] * gx
             fy -= volume[q] * gy
         if dim2:
@@ -261,18 +276,12 @@ def particle_forces_split(position, velocity, volume, kp, u, v, p, dx, dy, px, p
     idx, idy = 1.0 / dx, 1.0 / dy
     three = velocity.shape[1] > 2
     for q in range(position.shape[0]):
-        x = position[q, 0]
-        y = position[q, 1]
-        ci0, ci1, cw0, cw1 = _centre_axis(x, idx, nx, px)
-        fi0, fi1, fw0, fw1 = _face_axis(x, idx, nx, px)
-        cj0, cj1, cv0, cv1 = _centre_axis(y, idy, ny, py)
-        fj0, fj1, fv0, fv1 = _face_axis(y, idy, ny, py)
+        ug, vg, gx, gy = _gas_at(position[q, 0], position[q, 1], u, v, p, idx, idy, nx, ny, px, py, True,
+                                 pressure_force)
         k = kp[q]
-        ax = k * _mean(u, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1)
-        ay = k * _mean(v, ci0, ci1, cw0, cw1, fj0, fj1, fv0, fv1)
+        ax = k * ug
+        ay = k * vg
         if pressure_force:  # −V_p ∇p, Sun eq. 28
-            gx, gy = _gradient_at(p, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, ci0, ci1, cw0, cw1, fj0, fj1, fv0, fv1,
-                                  nx, ny, idx, idy, px, py)
             ax -= volume[q] * gx
             ay -= volume[q] * gy
         vx = velocity[q, 0]
@@ -342,14 +351,7 @@ def cell_forces(position, velocity, volume, beta, solids_u, solids_v, u, v, p, d
         fy = share * (0.5 * (v[i, j] + v[i, j + 1]) - solids_v[i, j])
         fz = 0.0
         if pressure_force:
-            x = position[q, 0]
-            y = position[q, 1]
-            ci0, ci1, cw0, cw1 = _centre_axis(x, idx, nx, px)
-            fi0, fi1, fw0, fw1 = _face_axis(x, idx, nx, px)
-            cj0, cj1, cv0, cv1 = _centre_axis(y, idy, ny, py)
-            fj0, fj1, fv0, fv1 = _face_axis(y, idy, ny, py)
-            gx, gy = _gradient_at(p, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, ci0, ci1, cw0, cw1, fj0, fj1, fv0, fv1,
-                                  nx, ny, idx, idy, px, py)
+            _, _, gx, gy = _gas_at(position[q, 0], position[q, 1], u, v, p, idx, idy, nx, ny, px, py, False, True)
             fx -= volume[q] * gx
             fy -= volume[q] * gy
         store_force(out, total, q, fx, fy, fz, follow)

@@ -52,9 +52,10 @@ class DragLaw(BaseModel):
 
     def gas_side(self) -> "DragLaw":
         """The law whose β the gas takes per cell: this one, or the registered law of ``gas_code``."""
-        if self.gas_code is None or self.gas_code == self.code:
+        code = self.cell_code()
+        if code == self.code:
             return self
-        return next(drag_laws.get(n)() for n in drag_laws.names() if drag_laws.get(n).code == self.gas_code)
+        return next(drag_laws.get(n)() for n in drag_laws.names() if drag_laws.get(n).code == code)
 
     def beta(self, voidage, slip_speed, diameter, gas_density, gas_viscosity, y_ratio=1.0) -> np.ndarray:
         """β [kg m^-3 s^-1] per unit bed volume of the particle force; arguments broadcast against each other.

@@ -221,6 +221,17 @@ def test_truncate_after_drops_later_snapshots_and_writing_goes_on(tmp_path):
     GasFieldWriter(tmp_path / "none").truncate_after(0)  # no file yet: nothing to do
 
 
+def test_the_index_kept_between_snapshots_is_the_files(tmp_path):
+    """The writer keeps its index in memory (not read back per snapshot); it must equal the file's."""
+    write(tmp_path, [fake_sim(0.01 * k, 10 * k, seed=k) for k in range(3)])
+    kept = (tmp_path / "gas.xdmf").read_text()
+    GasFieldWriter(tmp_path).finalize(None)  # the index rebuilt from gas.h5
+    assert (tmp_path / "gas.xdmf").read_text() == kept
+    GasFieldWriter(tmp_path)(fake_sim(0.03, 30, seed=5))  # a new writer on the file goes on after its last
+    assert check_xdmf(tmp_path, NX, NY) == [0.0, 0.01, 0.02, 0.03]
+    np.testing.assert_array_equal(read_gas_fields(tmp_path)["step"], [0, 10, 20, 30])
+
+
 def test_a_snapshot_cut_off_by_a_crash_is_ignored_then_dropped(tmp_path):
     w = write(tmp_path, [fake_sim(0.0, 0), fake_sim(0.01, 10, seed=1)])
     with h5py.File(tmp_path / "gas.h5", "a") as f:  # what a kill during the third write leaves

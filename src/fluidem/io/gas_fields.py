@@ -112,6 +112,11 @@ class GasFieldWriter:
         self.path = Path(out_dir) / GAS_FILE
         self.xdmf = Path(out_dir) / GAS_INDEX
         self.schedule = schedule or EveryTime(0.01)
+        # the index of the file's complete snapshots and the next group key, read from the file once and
+        # then kept up to date here: reading it back on every snapshot cost O(snapshots) attribute reads
+        # each time (40 ms per snapshot after 150 of them; 6 s of a 40 s hoomans-orifice run)
+        self._index: list[tuple[str, float, list[str]]] | None = None
+        self._next_key = 0
 
     def __call__(self, sim) -> None:
         gas = getattr(sim, "gas", None)
@@ -125,9 +130,11 @@ class GasFieldWriter:
         with h5py.File(self.path, "a") as f:
             _write_grid(f, grid)
             grp = f.require_group("snapshots")
-            keys = sorted(grp)
-            key = f"{int(keys[-1]) + 1 if keys else 0:06d}"
+            if self._index is None:
+                self._load_index(f)
+            key = f"{self._next_key:06d}"
             g = grp.create_group(key)
+            self._next_key += 1
             g.attrs["time"] = float(sim.time)
             g.attrs["step"] = int(sim.step)
             for name, value in fields.items():
@@ -135,8 +142,14 @@ class GasFieldWriter:
                 d.attrs["units"] = UNITS[name]
             f.flush()
             g.attrs["complete"] = True
-            index = _index(f)
-        write_text_atomic(self.xdmf, xdmf_text(self.path.name, index, grid.nx, grid.ny))
+        self._index.append((key, float(sim.time), [n for n in FIELDS + OPTIONAL_FIELDS if n in fields]))
+        write_text_atomic(self.xdmf, xdmf_text(self.path.name, self._index, grid.nx, grid.ny))
+
+    def _load_index(self, f: h5py.File) -> None:
+        """The index of the complete snapshots in ``f`` and the key after its last group (complete or not)."""
+        self._index = _index(f)
+        keys = sorted(f["snapshots"]) if "snapshots" in f else []
+        self._next_key = int(keys[-1]) + 1 if keys else 0
 
     def truncate_after(self, step: int) -> None:
         """Drop snapshots later than ``step`` and incomplete ones (used on resume), then rewrite the index.
@@ -152,7 +165,8 @@ class GasFieldWriter:
                 for k in list(grp):
                     if not grp[k].attrs.get("complete", False) or int(grp[k].attrs["step"]) > step:
                         del grp[k]
-                index = _index(f)
+                self._load_index(f)
+                index = self._index
                 nx, ny = (int(f.attrs["nx"]), int(f.attrs["ny"])) if "nx" in f.attrs else (0, 0)
         except (OSError, KeyError) as err:
             aside = self.path.with_name(self.path.name + ".unreadable")
@@ -160,6 +174,7 @@ class GasFieldWriter:
             warnings.warn(f"{self.path} could not be read on resume ({err}); moved to {aside.name}, "
                           f"gas fields start again from this step", RuntimeWarning, stacklevel=2)
             index, nx, ny = [], 0, 0
+            self._index, self._next_key = None, 0  # the new file's, on the next snapshot
         write_text_atomic(self.xdmf, xdmf_text(self.path.name, index, nx, ny))
 
     def finalize(self, sim) -> None:

@@ -33,11 +33,16 @@ class ParticleWriter:
         self.xdmf = Path(out_dir) / "particles.xdmf"
         self.schedule = schedule or EveryTime(0.01)
         self.extra_fields = extra_fields or {}
+        # (key, time) of the file's snapshots: read from the file once, then kept up to date here (reading
+        # every snapshot's time back on each write made a run's output cost grow with the square of its length)
+        self._times: list[tuple[str, float]] | None = None
 
     def __call__(self, sim) -> None:
         st = sim.engine.state
         with h5py.File(self.path, "a") as f:
             grp = f.require_group("snapshots")
+            if self._times is None:
+                self._times = _times(grp)
             key = f"{len(grp):06d}"
             g = grp.create_group(key)
             g.attrs["time"] = sim.time
@@ -50,10 +55,9 @@ class ParticleWriter:
             g["id"] = np.arange(st.n, dtype=np.int64)
             for name, fn in self.extra_fields.items():
                 g[name] = fn(sim)
-            times = [(k, float(grp[k].attrs["time"])) for k in sorted(grp)]
-            n = st.n
             fields = _field_layout(g)
-        write_text_atomic(self.xdmf, xdmf_text(self.path.name, times, n, fields))
+        self._times.append((key, float(sim.time)))
+        write_text_atomic(self.xdmf, xdmf_text(self.path.name, self._times, st.n, fields))
 
     def truncate_after(self, step: int) -> None:
         """Drop snapshots later than ``step`` (used on resume)."""
@@ -64,10 +68,15 @@ class ParticleWriter:
             for k in list(grp):
                 if int(grp[k].attrs["step"]) > step:
                     del grp[k]
-            times = [(k, float(grp[k].attrs["time"])) for k in sorted(grp)]
+            times = self._times = _times(grp)
             n = grp[times[0][0]]["position"].shape[0] if times else 0
             fields = _field_layout(grp[times[-1][0]]) if times else None
         write_text_atomic(self.xdmf, xdmf_text(self.path.name, times, n, fields))
+
+
+def _times(grp) -> list[tuple[str, float]]:
+    """(key, time) of the snapshots in ``grp``, in order."""
+    return [(k, float(grp[k].attrs["time"])) for k in sorted(grp)]
 
 
 def _field_layout(group) -> dict[str, tuple[str, int, str, int]]:

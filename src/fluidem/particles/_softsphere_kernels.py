@@ -206,6 +206,22 @@ def walls_now(motion, point0, t):
     return out
 
 
+@njit(cache=True, error_model="numpy")
+def wall_axes(wall_normal):
+    """(W,) int64: k where wall w's normal is ±e_k (a box side), else −1.
+
+    For such a wall the gap n·(x − p) is ±(x_k − p_k), computed so in _gather_range: the same
+    number as the full dot product (the other two terms are zero), at a fraction of the cost
+    (gather_forces of the tsuji-jet bed: 58 → 45 µs per step with its four box sides)."""
+    nw = wall_normal.shape[0]
+    axis = np.full(nw, -1, dtype=np.int64)
+    for w in range(nw):
+        for k in range(3):
+            if (abs(wall_normal[w, k]) == 1.0) & (wall_normal[w, (k + 1) % 3] == 0.0) & (wall_normal[w, (k + 2) % 3] == 0.0):
+                axis[w] = k
+    return axis
+
+
 @njit(cache=True, error_model="numpy", inline="always")
 def _wall_force(law, overlap, nx, ny, nz, vx, vy, vz, wx, wy, wz, m, a, dt, h0, h1, h2, update):
     """(F (3), T (3), new history (3)) of a sphere (mass m, radius a) on a wall plane (unit normal n into
@@ -247,7 +263,7 @@ def wall_contact(i, w, pos, vel, omega, radius, mass, species, pw, wall_now, wal
 
 
 @njit(cache=True, error_model="numpy")
-def _gather_range(lo, hi, pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_hist, wall_touch,
+def _gather_range(lo, hi, pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_axis, wall_hist, wall_touch,
                   gravity, ext_force, ext_damping, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos,
                   limit2):
     """gather_forces for particles lo..hi−1 (serial code; the parallel driver splits the range)."""
@@ -288,7 +304,15 @@ def _gather_range(lo, hi, pos, vel, omega, radius, mass, species, pw, wall_now, 
             nx = wall_normal[w, 0]
             ny = wall_normal[w, 1]
             nz = wall_normal[w, 2]
-            gap = (xi - wall_now[w, 0]) * nx + (yi - wall_now[w, 1]) * ny + (zi - wall_now[w, 2]) * nz
+            k = wall_axis[w]
+            if k == 0:  # a box side: n·(x − p) with the two zero terms left out (wall_axes)
+                gap = (xi - wall_now[w, 0]) * nx
+            elif k == 1:
+                gap = (yi - wall_now[w, 1]) * ny
+            elif k == 2:
+                gap = (zi - wall_now[w, 2]) * nz
+            else:
+                gap = (xi - wall_now[w, 0]) * nx + (yi - wall_now[w, 1]) * ny + (zi - wall_now[w, 2]) * nz
             overlap = a - gap
             if overlap <= 0.0:
                 # the spring of a wall contact that ended is reset; wall_touch[i, w] False means it is zero
@@ -384,7 +408,7 @@ GATHER_CHUNK = 512  # particles per parallel work item of gather_forces
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
-def _gather_parallel(pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_hist, wall_touch,
+def _gather_parallel(pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_axis, wall_hist, wall_touch,
                      gravity, ext_force, ext_damping, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos,
                      limit2):
     n = pos.shape[0]
@@ -392,7 +416,7 @@ def _gather_parallel(pos, vel, omega, radius, mass, species, pw, wall_now, wall_
     moved = 0
     for c in prange(nchunk):
         moved += _gather_range(c * GATHER_CHUNK, min(n, (c + 1) * GATHER_CHUNK), pos, vel, omega, radius, mass,
-                               species, pw, wall_now, wall_normal, wall_hist, wall_touch, gravity, ext_force, ext_damping, dim2, sum_f,
+                               species, pw, wall_now, wall_normal, wall_axis, wall_hist, wall_touch, gravity, ext_force, ext_damping, dim2, sum_f,
                                sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2)
     return moved
 
@@ -411,12 +435,13 @@ def gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_
     Each particle's arithmetic is the same on any number of threads (``parallel`` False: no parallel region).
     """
     wall_now = walls_now(wall_motion, wall_point0, t)
+    wall_axis = wall_axes(wall_normal)
     n = pos.shape[0]
     if parallel and n > GATHER_CHUNK:
-        return _gather_parallel(pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_hist,
+        return _gather_parallel(pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_axis, wall_hist,
                                 wall_touch, gravity, ext_force, ext_damping, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia,
                                 mode, ref_pos, limit2)
-    return _gather_range(0, n, pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_hist,
+    return _gather_range(0, n, pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_axis, wall_hist,
                          wall_touch, gravity, ext_force, ext_damping, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode,
                          ref_pos, limit2)
 

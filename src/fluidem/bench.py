@@ -11,9 +11,10 @@ pour        The built-in 2D ``pour`` case (500 particles), stepping from its sta
 coupled     The built-in ``tsuji-jet`` case (Sun 2007: 2400 soft spheres, 15 × 45 gas cells,
             DT = 1e-4 s, 7 DEM sub-steps) including the gas, from its start for ``coupled_until``
             simulated seconds after a short warm-up that compiles: particle-steps per second,
-            ms per gas step split into DEM, gas solve, map, deposit, forces and the rest, and
-            the wall time that 20 s at this pace would take (the case's length; the issue's
-            target is 3 minutes on 2 cores).
+            ms per gas step split into DEM, gas solve, map, deposit, forces and the rest (of the
+            DEM, the neighbour lists' share estimated as rebuilds × one rebuild timed after the
+            run: the sub-steps run in one compiled call), and the wall time that 20 s at this pace
+            would take (the case's length; the issue's target is 3 minutes on 2 cores).
 hard spheres The built-in ``hoomans-orifice`` case (Hoomans 1996 Table 2: 2400 hard spheres, 15 × 25
             gas cells, DT = 1e-4 s) including the gas: its 0.5 s start-up at the u_mf background is run
             untimed (``hard_warmup``), then ``hard_until`` seconds of the 45 m/s jet are timed:
@@ -29,6 +30,7 @@ Only the stepping loop is timed. Results are particle-steps per second.
 from __future__ import annotations
 
 import json
+import math
 import os
 import sys
 import time
@@ -218,18 +220,36 @@ def time_coupled(case_name: str = "tsuji-jet", until: float = 0.25, warmup: floa
         case = case.with_overrides({"threads": threads})
     sim = Simulation(case)
     sim.run(until=warmup)  # compiles (or loads the caches)
-    t_start = sim.time
+    t_start, rebuilds0 = sim.time, sim.engine.rebuilds
     parts = profile_coupled(sim, t_start + until)
     n = sim.state.n
     dem_steps = parts["gas_steps"] * sim.gas.substeps
     per_step = parts["total"] / max(parts["gas_steps"], 1)
+    rebuilds = sim.engine.rebuilds - rebuilds0
     return {"problem": f"coupled {case_name}", "n_particles": n, "threads": sim.threads,
             "sim_seconds": sim.time - t_start, "wall_s": parts["total"], "gas_steps": parts["gas_steps"],
             "substeps": sim.gas.substeps, "particle_steps_per_s": n * dem_steps / parts["total"],
             "ms_per_gas_step": 1e3 * per_step,
             "ms_per_gas_step_parts": {k: 1e3 * parts[k] / max(parts["gas_steps"], 1)
                                       for k in [c[0] for c in COUPLED_COMPONENTS] + ["other"]},
-            "minutes_for_20_s": per_step * round(20.0 / sim.gas.gas_dt) / 60.0}
+            "minutes_for_20_s": per_step * round(20.0 / sim.gas.gas_dt) / 60.0,
+            "neighbour_rebuilds": rebuilds,
+            "dem_neighbours_ms_per_gas_step": 1e3 * rebuilds * time_rebuild(sim.engine) / max(parts["gas_steps"], 1)}
+
+
+def time_rebuild(eng, repeat: int = 5) -> float:
+    """Seconds one Verlet-list rebuild (build and history carry-over) of a soft-sphere engine takes at its
+    current positions (least of ``repeat``); the engine is left as it was. The DEM sub-steps of a gas step run
+    in one compiled call, so the list's share of them is estimated as rebuilds × this."""
+    from .particles import _softsphere_kernels as K
+
+    st, best = eng.state, math.inf
+    for _ in range(repeat):
+        ref = eng.ref_pos.copy()
+        t0 = time.perf_counter()
+        K.rebuild(st.position, st.radius, eng.skin, eng.dim2, eng.row_start, eng.partner, eng.hist, ref)
+        best = min(best, time.perf_counter() - t0)
+    return best
 
 
 def time_hard_sphere(case_name: str = "hoomans-orifice", warmup: float = 0.5, until: float = 0.1) -> dict:
@@ -291,7 +311,9 @@ def run_bench(sizes="10000,100000", threads="1,2", steps: int = 0, as_json: str 
                   f"{r['wall_s']:7.2f} {r['particle_steps_per_s']:17.3e} {r['ms_per_gas_step']:11.3f} "
                   f"{r['minutes_for_20_s']:8.1f} min", flush=True)
             print("    ms per gas step: " + ", ".join(f"{k} {v:.3f}" for k, v in r["ms_per_gas_step_parts"].items()
-                                                     if k != "beta" or v > 0), flush=True)
+                                                     if k != "beta" or v > 0)
+                  + f"; of the DEM, neighbour lists about {r['dem_neighbours_ms_per_gas_step']:.3f} "
+                  f"({r['neighbour_rebuilds']} rebuilds), contacts and integration the rest", flush=True)
     if hard_sphere:
         r = time_hard_sphere("hoomans-orifice", warmup=hard_warmup, until=hard_until)
         rows.append(r)

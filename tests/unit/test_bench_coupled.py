@@ -16,6 +16,10 @@ def test_coupled_timing_row():
     assert parts["DEM"] > 0 and parts["gas solve"] > 0 and parts["deposit"] > 0 and parts["beta"] == 0.0
     assert math.isclose(r["particle_steps_per_s"], 2400 * 20 * 7 / r["wall_s"], rel_tol=1e-12)
     assert math.isclose(r["minutes_for_20_s"], r["ms_per_gas_step"] * 1e-3 * 200000 / 60, rel_tol=1e-12)
+    # the neighbour lists' share of the DEM: rebuilds x one rebuild, part of the DEM time
+    assert r["neighbour_rebuilds"] >= 0
+    assert (r["dem_neighbours_ms_per_gas_step"] == 0.0) == (r["neighbour_rebuilds"] == 0)
+    assert r["dem_neighbours_ms_per_gas_step"] <= parts["DEM"]
 
 
 def test_bench_refuses_a_coupled_window_that_is_not_positive(capsys):

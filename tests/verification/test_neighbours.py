@@ -3,8 +3,8 @@
 ``build_pairs`` must list every pair with |r_i − r_j| < a_i + a_j + skin exactly once and
 no other (both sides evaluate the same floating-point expression, so equality is exact);
 pairs are compared unordered, as the owner of a pair is the particle in the lower slab.
-``build_pairs`` fills chunks of rows in parallel, each into a buffer of its own that grows
-when too small, so it is tested with every thread (``all_threads``) and with a skin so large
+``build_pairs`` finds the pairs of chunks of the particles (in cell order) in parallel, each
+into a buffer of its own that grows when too small, so it is tested with every thread (``all_threads``) and with a skin so large
 that the first buffers overflow.
 The engine's list, rebuilt when a particle has moved more than skin/2, must always hold
 every pair in contact.

@@ -8,29 +8,80 @@ loops then run the even slabs in parallel, then the odd ones, adding straight
 into per-particle sums without races. The slab partition depends on geometry
 only, so sums have the same order for any thread count: results are bitwise
 independent of the number of threads.
+
+How ``build_pairs`` finds the pairs, and why so. Measured with one thread on the tsuji-jet
+state at t = 1.5 s (2400 spheres in one layer, 24,800 candidates, 4006 pairs) and on the
+10,000-sphere 3D bed of ``fluidem bench`` (584,000 candidates, 46,052 pairs) with
+``benchmarks/neighbour_build.py``. The former build filled each particle's row in turn: 27 (9)
+cells, a loop of 0-6 candidates each, read through ``members[m]`` from the particle arrays,
+then an insertion sort of the row. Its fill cost ~27 ns a candidate in 2D and 11 ns in 3D,
+where a loop over candidates should take 2-3 ns. Three causes:
+
+* signed indices: Numba wraps negative indices round, so each ``a[k]`` with a signed k costs
+  a sign test, a masked add and an address rebuild, and the extra live values spilled the
+  inner loop to the stack. Indexing with ``np.uintp`` drops that (the former fill with
+  unsigned indices: -15 % in 2D, -23 % in 3D). The loops here index through ``U``.
+* a short loop per cell: a loop of 0-6 trips ends in a mispredicted branch, ~10 ns (summing
+  ``members`` cell by cell took 320 µs in 2D, the cells' bounds alone 80 µs). Here the
+  particles are copied in cell order, (x, y, z, a) side by side, and cells are numbered
+  x-major, so cells (x, y, z-1..z+1) are one run of slots, and with one cell in z so are
+  (x, y-1..y+1): 9 (3) loops a particle instead of 27 (9), and no gather through
+  ``members`` (a further -45 % in 2D, -36 % in 3D).
+* every pair was tested from both ends, and each row insertion-sorted with a data-dependent
+  branch a step (20 % of the fill).
+
+So each pair of neighbouring cells is visited once (a cell's later particles and the 13 (4)
+cells "after" it: 5 (2) runs of slots a particle), the pairs within the cut-off are appended
+without a branch as owner << 32 | partner, and two stable counting sorts (by partner, then by
+owner) make the CSR with every row sorted. A build went from 690 to 170 µs (tsuji-jet) and
+from 6.6 to 1.9 ms (10k bed). The pairs are the former ones (the same cells, the same
+expressions for the distance and the cut-off, symmetric in i and j to the last bit) and their
+order is fixed by the sort, so the output is bitwise the former one for any chunking and
+thread count.
 """
 import numpy as np
 from numba import njit, prange
 
+U = np.uintp  # unsigned array index: no wrap-around code for negative indices (see above)
+
 
 @njit(cache=True, error_model="numpy")
-def _cell_grid(pos, radius, skin, dim2):
+def _bounds(pos, radius):
+    """Lower and upper corner of the particle centres (3,) and the largest radius, in one pass."""
     n = pos.shape[0]
-    lo = np.empty(3)
-    hi = np.empty(3)
-    for d in range(3):
-        lo[d] = np.inf
-        hi[d] = -np.inf
+    x0 = np.inf
+    y0 = np.inf
+    z0 = np.inf
+    x1 = -np.inf
+    y1 = -np.inf
+    z1 = -np.inf
     rmax = 0.0
     for i in range(n):
-        for d in range(3):
-            x = pos[i, d]
-            if x < lo[d]:
-                lo[d] = x
-            if x > hi[d]:
-                hi[d] = x
-        if radius[i] > rmax:
-            rmax = radius[i]
+        ui = U(i)
+        x = pos[ui, U(0)]
+        y = pos[ui, U(1)]
+        z = pos[ui, U(2)]
+        x0 = min(x0, x)
+        x1 = max(x1, x)
+        y0 = min(y0, y)
+        y1 = max(y1, y)
+        z0 = min(z0, z)
+        z1 = max(z1, z)
+        rmax = max(rmax, radius[ui])
+    lo = np.empty(3)
+    hi = np.empty(3)
+    lo[0] = x0
+    lo[1] = y0
+    lo[2] = z0
+    hi[0] = x1
+    hi[1] = y1
+    hi[2] = z1
+    return lo, hi, rmax
+
+
+@njit(cache=True, error_model="numpy")
+def _grid(lo, hi, rmax, skin, dim2, n):
+    """Cells per axis (at least 2 R_max + skin wide) and cells per unit length, for the bounds lo, hi."""
     size = 2.0 * rmax + skin
     ncell = np.ones(3, dtype=np.int64)
     # grow cells if a stray particle would make the grid too large
@@ -49,11 +100,22 @@ def _cell_grid(pos, radius, skin, dim2):
     for d in range(3):
         ext = hi[d] - lo[d]
         inv[d] = ncell[d] / ext if ext > 0 else 0.0
+    return inv, ncell
+
+
+@njit(cache=True, error_model="numpy")
+def _cell_grid(pos, radius, skin, dim2):
+    """Cell grid of the particles: (lower corner (3,), cells per unit length (3,), cells per axis (3,)).
+
+    The grid of ``build_pairs``, for the hard-sphere engine's list (``_hardsphere_kernels``)."""
+    lo, hi, rmax = _bounds(pos, radius)
+    inv, ncell = _grid(lo, hi, rmax, skin, dim2, pos.shape[0])
     return lo, inv, ncell
 
 
 @njit(cache=True, error_model="numpy")
 def _bin(pos, lo, inv, ncell):
+    """Cell of each particle (x-major: (x ny + y) nz + z) and the CSR of the cells' members (hard-sphere list)."""
     n = pos.shape[0]
     cell = np.empty(n, dtype=np.int64)
     for i in range(n):
@@ -87,141 +149,263 @@ def _counting_sort(key, nkeys):
     return start, members
 
 
-@njit(cache=True, error_model="numpy", inline="always")
-def _fill_row(i, pos, radius, skin, cell, start, members, ncell, slab, buf, w):
-    """Append the partners j owned by particle i to ``buf`` from slot w, sorted; returns the new end.
+@njit(cache=True, error_model="numpy")
+def _sort_by_cell(pos, radius, lo, hi, rmax, skin, dim2, max_slabs, inv, ncell):
+    """Slabs and cells of the particles, in one pass over them and one scatter.
 
-    The append is branch-free (write j, advance by the 0/1 of "owned and within the cut-off"):
-    whether a candidate is kept is a coin toss for the branch predictor, and mispredicted
-    branches were most of the cost of the list build (3.5x slower in 2D, 2.5x in 3D).
-    ``buf`` must have room for every candidate of the row plus one.
+    Returns (slab_start (S+1,), slab_members (N,)): the slabs (at least one cut-off
+    2 R_max + skin wide along the longest axis, at most ``max_slabs``) as CSR, members
+    ascending; (start (C+1,), xs (N, 4), key (N,), kmax): the particles in cell order (x-major
+    cells, ascending index within a cell), start[c] the first slot of cell c, xs[m] = (x, y, z, a)
+    and key[m] = slab << 32 | index of the particle in slot m, and the most particles in a cell.
+    The key orders a pair's ends as the list does: the smaller key owns the pair.
     """
-    c = cell[i]
-    cz = c % ncell[2]
-    cy = (c // ncell[2]) % ncell[1]
-    cx = c // (ncell[2] * ncell[1])
-    xi = pos[i, 0]
-    yi = pos[i, 1]
-    zi = pos[i, 2]
-    ai = radius[i]
-    si = slab[i]
-    w0 = w
-    for x in range(max(cx - 1, 0), min(cx + 2, ncell[0])):
-        for y in range(max(cy - 1, 0), min(cy + 2, ncell[1])):
-            base = (x * ncell[1] + y) * ncell[2]
-            for z in range(max(cz - 1, 0), min(cz + 2, ncell[2])):
-                cc = base + z
-                for m in range(start[cc], start[cc + 1]):
-                    j = members[m]
-                    sj = slab[j]
-                    rx = xi - pos[j, 0]
-                    ry = yi - pos[j, 1]
-                    rz = zi - pos[j, 2]
-                    cut = ai + radius[j] + skin  # as brute_force_pairs: the same rounding
-                    own = (sj > si) | ((sj == si) & (j > i))
-                    close = rx * rx + ry * ry + rz * rz < cut * cut
-                    buf[w] = j
-                    w += np.int64(own & close)
-    # insertion sort of the (short) row: deterministic, cache-friendly lookups by partner
-    for k in range(w0 + 1, w):
-        v = buf[k]
-        q = k - 1
-        while q >= w0 and buf[q] > v:
-            buf[q + 1] = buf[q]
-            q -= 1
-        buf[q + 1] = v
-    return w
-
-
-@njit(cache=True, error_model="numpy")
-def _fill_rows(lo, hi, pos, radius, skin, cell, start, members, ncell, slab, buf, counts, room):
-    """Rows lo..hi−1 one after the other into ``buf`` (from slot 0), their lengths into ``counts``.
-
-    Returns the slots used, or −1 when fewer than ``room`` (the most candidates one row can
-    have) slots were left before a row: the caller retries with a larger buffer."""
-    w = 0
-    cap = buf.shape[0]
-    for i in range(lo, hi):
-        if cap - w < room:
-            return -1
-        w2 = _fill_row(i, pos, radius, skin, cell, start, members, ncell, slab, buf, w)
-        counts[i] = w2 - w
-        w = w2
-    return w
-
-
-@njit(cache=True, error_model="numpy")
-def _slabs(pos, radius, skin, dim2, max_slabs):
-    """Slab index of each particle and CSR of slab members (slabs >= one cut-off wide)."""
     n = pos.shape[0]
     axis = 0
     best = -1.0
     for d in range(2 if dim2 else 3):
-        lo = np.inf
-        hi = -np.inf
-        for i in range(n):
-            lo = min(lo, pos[i, d])
-            hi = max(hi, pos[i, d])
-        if hi - lo > best:
-            best = hi - lo
+        if hi[d] - lo[d] > best:
+            best = hi[d] - lo[d]
             axis = d
-    lo = np.inf
-    rmax = 0.0
-    for i in range(n):
-        lo = min(lo, pos[i, axis])
-        rmax = max(rmax, radius[i])
-    cut = 2.0 * rmax + skin
-    nslab = max(1, min(max_slabs, int(best / cut))) if n > 0 else 1
+    a0 = lo[axis]
+    nslab = max(1, min(max_slabs, int(best / (2.0 * rmax + skin)))) if n > 0 else 1
     width = best / nslab if best > 0 else 1.0
+    nx = ncell[0]
+    ny = ncell[1]
+    nz = ncell[2]
+    ncells = nx * ny * nz
     slab = np.empty(n, dtype=np.int64)
+    cell = np.empty(n, dtype=np.int64)
+    slab_start = np.zeros(nslab + 1, dtype=np.int64)
+    start = np.zeros(ncells + 1, dtype=np.int64)
     for i in range(n):
-        slab[i] = min(nslab - 1, int((pos[i, axis] - lo) / width))
-    start, members = _counting_sort(slab, nslab)
-    return slab, start, members
+        ui = U(i)
+        s = min(nslab - 1, int((pos[ui, U(axis)] - a0) / width))
+        kx = min(max(int((pos[ui, U(0)] - lo[0]) * inv[0]), 0), nx - 1)
+        ky = min(max(int((pos[ui, U(1)] - lo[1]) * inv[1]), 0), ny - 1)
+        kz = min(max(int((pos[ui, U(2)] - lo[2]) * inv[2]), 0), nz - 1)
+        c = (kx * ny + ky) * nz + kz
+        slab[ui] = s
+        cell[ui] = c
+        slab_start[U(s + 1)] += 1
+        start[U(c + 1)] += 1
+    t = 0
+    for k in range(nslab + 1):
+        t += slab_start[U(k)]
+        slab_start[U(k)] = t
+    t = 0
+    kmax = 1
+    for c in range(ncells + 1):
+        kmax = max(kmax, start[U(c)])  # a count still
+        t += start[U(c)]
+        start[U(c)] = t
+    sfill = slab_start[:-1].copy()
+    fill = start[:-1].copy()
+    slab_members = np.empty(n, dtype=np.int64)
+    xs = np.empty((n, 4))
+    key = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        ui = U(i)
+        s = slab[ui]
+        q = sfill[U(s)]
+        sfill[U(s)] = q + 1
+        slab_members[U(q)] = i
+        c = cell[ui]
+        m = fill[U(c)]
+        fill[U(c)] = m + 1
+        um = U(m)
+        xs[um, U(0)] = pos[ui, U(0)]
+        xs[um, U(1)] = pos[ui, U(1)]
+        xs[um, U(2)] = pos[ui, U(2)]
+        xs[um, U(3)] = radius[ui]
+        key[um] = (s << 32) | i
+    return slab_start, slab_members, start, xs, key, kmax
 
 
-BUILD_CHUNKS = 16  # work items of the list build (rows lo..hi each, filled into a buffer of their own)
+@njit(cache=True, error_model="numpy", inline="always")
+def _scan(xi, yi, zi, ai, kh, a, b, skin, xs, key, out, w):
+    """Append the pairs of the particle (xi, yi, zi, ai, key kh) with slots a..b−1 to ``out`` from w.
+
+    A pair is written as owner << 32 | partner, at w, which then advances by the 0/1 of
+    "within the cut-off": no branch on that coin toss (the former fill measured mispredicted
+    branches there as most of its cost, 3.5x in 2D). The distance and cut-off are the
+    expressions of ``brute_force_pairs``, to the same rounding whichever end is i.
+    """
+    for m in range(a, b):
+        um = U(m)
+        rx = xi - xs[um, U(0)]
+        ry = yi - xs[um, U(1)]
+        rz = zi - xs[um, U(2)]
+        cut = ai + xs[um, U(3)] + skin
+        km = key[um]
+        out[U(w)] = ((kh << 32) | (km & 0xFFFFFFFF)) if km > kh else ((km << 32) | (kh & 0xFFFFFFFF))
+        w += np.int64(rx * rx + ry * ry + rz * rz < cut * cut)
+    return w
+
+
+@njit(cache=True, error_model="numpy")
+def _pairs_from(h0, h1, skin, ncell, start, xs, key, out, room):
+    """The pairs found from the particles in slots h0..h1−1 (cell order) into ``out``; returns their number.
+
+    The particle in slot h is tested against the later slots of its own cell and the cells
+    "after" its cell, so that each pair of neighbouring cells is visited once: in 3D cell
+    (x, y, z+1) (contiguous with the own cell), (x, y+1, z-1..z+1) and (x+1, y-1..y+1, z-1..z+1),
+    5 contiguous runs of slots; with one cell in z, (x, y+1) and (x+1, y-1..y+1), 2 runs.
+    Returns −1 when fewer than ``room`` slots (the most one particle can append) were left
+    before a particle: the caller retries with a larger buffer.
+    """
+    nx = ncell[0]
+    ny = ncell[1]
+    nz = ncell[2]
+    cap = out.shape[0]
+    w = 0
+    if h0 >= h1:
+        return 0
+    lo = 0  # the cell of slot h0: the last c with start[c] <= h0 (bisection)
+    hi = start.shape[0] - 1
+    while lo < hi:
+        mid = (lo + hi + 1) // 2
+        if start[U(mid)] <= h0:
+            lo = mid
+        else:
+            hi = mid - 1
+    c = lo
+    cz = c % nz
+    cy = (c // nz) % ny
+    cx = c // (nz * ny)
+    h = h0
+    while h < h1:  # cell by cell; (cx, cy, cz) follow c without divisions
+        e = start[U(c + 1)]
+        if e > h:
+            y0 = max(cy - 1, 0)
+            y1 = min(cy + 2, ny)
+            z0 = max(cz - 1, 0)
+            z1 = min(cz + 2, nz)
+            if nz == 1:
+                e1 = start[U(min(c + 2, (cx + 1) * ny))]  # own cell and (x, y+1)
+                xn = min(cx + 1, nx - 1)
+                a2 = start[U(xn * ny + y0)]  # (x+1, y-1..y+1), empty at the last x
+                b2 = start[U(xn * ny + y1)] if cx + 1 < nx else a2
+            else:
+                e1 = start[U(c + 2)] if cz + 1 < nz else e  # own cell and (x, y, z+1)
+            for hh in range(h, min(e, h1)):
+                if cap - w < room:
+                    return -1
+                uh = U(hh)
+                xi = xs[uh, U(0)]
+                yi = xs[uh, U(1)]
+                zi = xs[uh, U(2)]
+                ai = xs[uh, U(3)]
+                kh = key[uh]
+                w = _scan(xi, yi, zi, ai, kh, hh + 1, e1, skin, xs, key, out, w)
+                if nz == 1:
+                    w = _scan(xi, yi, zi, ai, kh, a2, b2, skin, xs, key, out, w)
+                else:
+                    if cy + 1 < ny:
+                        base = (cx * ny + cy + 1) * nz
+                        w = _scan(xi, yi, zi, ai, kh, start[U(base + z0)], start[U(base + z1)], skin, xs, key,
+                                  out, w)
+                    if cx + 1 < nx:
+                        for y in range(y0, y1):
+                            base = ((cx + 1) * ny + y) * nz
+                            w = _scan(xi, yi, zi, ai, kh, start[U(base + z0)], start[U(base + z1)], skin, xs, key,
+                                      out, w)
+            h = min(e, h1)
+        c += 1
+        cz += 1
+        if cz == nz:
+            cz = 0
+            cy += 1
+            if cy == ny:
+                cy = 0
+                cx += 1
+    return w
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
+def _pairs_parallel(n, skin, ncell, start, xs, key, out, used, room):
+    """Chunk c of the slots (n c / C .. n (c+1) / C − 1) into out[c], its count (or −1) into used[c]."""
+    nchunk = used.shape[0]
+    for c in prange(nchunk):
+        used[c] = _pairs_from(n * c // nchunk, n * (c + 1) // nchunk, skin, ncell, start, xs, key, out[c], room)
+
+
+@njit(cache=True, error_model="numpy")
+def _csr_of_pairs(n, out, used):
+    """(row_start (N+1,), partner (P,) int32) of the pairs out[c, :used[c]] (owner << 32 | partner).
+
+    Two stable counting sorts, by partner then by owner, leave each row sorted: no sort per row
+    (an insertion sort per row after the scatter by owner cost twice as much, 51 against 27 µs
+    on the tsuji-jet state, 610 against 320 µs on the 10k bed, its short loops mispredicted).
+    """
+    npair = 0
+    for c in range(used.shape[0]):
+        npair += used[c]
+    by_partner = np.zeros(n + 1, dtype=np.int64)
+    row_start = np.zeros(n + 1, dtype=np.int64)
+    for c in range(used.shape[0]):
+        for k in range(used[c]):
+            v = out[U(c), U(k)]
+            by_partner[U((v & 0xFFFFFFFF) + 1)] += 1
+            row_start[U((v >> 32) + 1)] += 1
+    s = 0
+    t = 0
+    for i in range(n + 1):
+        s += by_partner[U(i)]
+        by_partner[U(i)] = s
+        t += row_start[U(i)]
+        row_start[U(i)] = t
+    sorted_p = np.empty(npair, dtype=np.int64)
+    for c in range(used.shape[0]):
+        for k in range(used[c]):
+            v = out[U(c), U(k)]
+            p = v & 0xFFFFFFFF
+            q = by_partner[U(p)]
+            by_partner[U(p)] = q + 1
+            sorted_p[U(q)] = v
+    fill = row_start[:-1].copy()
+    partner = np.empty(npair, dtype=np.int32)  # 4-byte partners: less memory traffic per step
+    for q in range(npair):
+        v = sorted_p[U(q)]
+        o = v >> 32
+        r = fill[U(o)]
+        fill[U(o)] = r + 1
+        partner[U(r)] = v & 0xFFFFFFFF
+    return row_start, partner
+
+
+BUILD_CHUNKS = 16  # work items of the pair search (slots lo..hi each, into a buffer of their own)
+
+
+@njit(cache=True, error_model="numpy")
 def build_pairs(pos, radius, skin, dim2, expected=0):
     """Half neighbour list (CSR by owner) of all pairs closer than a_i + a_j + skin.
 
-    Returns (row_start (N+1,), partner (P,), slab_start (S+1,), slab_members (N,)).
-    Each chunk of rows is filled in one pass into a buffer of its own, then the buffers
-    are joined; ``expected`` (e.g. the previous list's length) sizes the buffers, which
-    grow if too small. The result does not depend on the chunking or the thread count.
+    Returns (row_start (N+1,), partner (P,) int32, slab_start (S+1,), slab_members (N,)); each
+    row lists its partners ascending. The particles are copied in cell order, chunks of them
+    search their pairs in parallel (``_pairs_from``), each chunk into a buffer of its own,
+    and a counting sort makes the CSR (``_csr_of_pairs``); ``expected`` (e.g. the previous
+    list's length) sizes the buffers, which grow if too small. The result does not depend
+    on the chunking or the thread count: it is the sorted set of pairs. Pairs are packed as
+    owner << 32 | partner, which needs N < 2^31 (as the int32 partners do).
     """
     n = pos.shape[0]
-    slab, slab_start, slab_members = _slabs(pos, radius, skin, dim2, 64)
-    lo, inv, ncell = _cell_grid(pos, radius, skin, dim2)
-    cell, start, members = _bin(pos, lo, inv, ncell)
-    # the most candidates one row can have: the members of its 3 x 3 (x 3) cells
-    room = 1
-    for c in range(ncell[0] * ncell[1] * ncell[2]):
-        room = max(room, start[c + 1] - start[c])
-    room = room * (9 if ncell[2] == 1 else 27) + 1
+    lo, hi, rmax = _bounds(pos, radius)
+    inv, ncell = _grid(lo, hi, rmax, skin, dim2, n)
+    slab_start, slab_members, start, xs, key, kmax = _sort_by_cell(pos, radius, lo, hi, rmax, skin, dim2, 64,
+                                                                   inv, ncell)
+    # the most pairs one particle can append: 2 + 3 cells (one cell in z) or 2 + 3 + 9 cells of kmax
+    room = kmax * (5 if ncell[2] == 1 else 14) + 1
     nchunk = max(1, min(BUILD_CHUNKS, n // 256))
-    per = (n + nchunk - 1) // nchunk
     cap = max(expected, 6 * n) // nchunk + room
-    counts = np.zeros(n, dtype=np.int64)
     used = np.zeros(nchunk, dtype=np.int64)
     while True:
-        bufs = np.empty((nchunk, cap), dtype=np.int32)
-        for c in prange(nchunk):
-            used[c] = _fill_rows(min(n, c * per), min(n, (c + 1) * per), pos, radius, skin, cell, start, members,
-                                 ncell, slab, bufs[c], counts, room)
+        out = np.empty((nchunk, cap), dtype=np.int64)
+        _pairs_parallel(n, skin, ncell, start, xs, key, out, used, room)
         if used.min() >= 0:
             break
         cap *= 2
-    row_start = np.zeros(n + 1, dtype=np.int64)
-    for i in range(n):
-        row_start[i + 1] = row_start[i] + counts[i]
-    partner = np.empty(row_start[n], dtype=np.int32)  # 4-byte partners: less memory traffic per step
-    for c in prange(nchunk):
-        b = row_start[min(n, c * per)]
-        for k in range(used[c]):
-            partner[b + k] = bufs[c, k]
+    row_start, partner = _csr_of_pairs(n, out, used)
     return row_start, partner, slab_start, slab_members
 
 

@@ -26,11 +26,17 @@ boundary.
                     the particles whose centre lies in the cell in proportion to V_p.
 
 Σ_faces V (β_f u_f − (β u_s)_f) = Σ_c D_c exactly (each face is half of two cells).
+
+Array indices in the per-particle loops are cast to unsigned (``U``): Numba adds wrap-around code
+for negative values to every access with a signed index (tsuji-jet bed at 1.5 s, one thread,
+bitwise the same results: ``deposit`` 245 → 209 µs, ``particle_forces_split`` 204 → 158 µs).
 """
 import math
 
 import numpy as np
 from numba import njit
+
+U = np.uintp  # unsigned array index: no wrap-around code (module docstring)
 
 from ._exchange_kernels import _cell, _drag_arguments_valid, store_force
 from .drag._dispatch import beta_per_solids
@@ -53,8 +59,8 @@ def _face_gradient(p, i, j, n, inv_d, periodic, axis):
     else:
         a, b = i - 1, i
     if axis == 0:
-        return (p[b, j] - p[a, j]) * inv_d
-    return (p[j, b] - p[j, a]) * inv_d
+        return (p[U(b), U(j)] - p[U(a), U(j)]) * inv_d
+    return (p[U(j), U(b)] - p[U(j), U(a)]) * inv_d
 
 
 @njit(cache=True, inline="always")
@@ -113,7 +119,7 @@ def _face_axis(x, inv_d, n, periodic):
 @njit(cache=True, inline="always")
 def _mean(f, i0, i1, a0, a1, j0, j1, b0, b1):
     """Σ a_i b_j f[i, j] over the two nodes of each axis."""
-    return a0 * (b0 * f[i0, j0] + b1 * f[i0, j1]) + a1 * (b0 * f[i1, j0] + b1 * f[i1, j1])
+    return a0 * (b0 * f[U(i0), U(j0)] + b1 * f[U(i0), U(j1)]) + a1 * (b0 * f[U(i1), U(j0)] + b1 * f[U(i1), U(j1)])
 
 
 @njit(cache=True, inline="always")
@@ -135,17 +141,17 @@ def _scatter(A, B, i0, i1, a0, a1, j0, j1, b0, b1, k, vel):
     """A[i, j] += a_i b_j k and B[i, j] += a_i b_j k vel over the two nodes of each axis (no branches:
     an inlined helper with array arguments and branches costs Numba reference counting)."""
     w = a0 * b0 * k
-    A[i0, j0] += w
-    B[i0, j0] += w * vel
+    A[U(i0), U(j0)] += w
+    B[U(i0), U(j0)] += w * vel
     w = a0 * b1 * k
-    A[i0, j1] += w
-    B[i0, j1] += w * vel
+    A[U(i0), U(j1)] += w
+    B[U(i0), U(j1)] += w * vel
     w = a1 * b0 * k
-    A[i1, j0] += w
-    B[i1, j0] += w * vel
+    A[U(i1), U(j0)] += w
+    B[U(i1), U(j0)] += w * vel
     w = a1 * b1 * k
-    A[i1, j1] += w
-    B[i1, j1] += w * vel
+    A[U(i1), U(j1)] += w
+    B[U(i1), U(j1)] += w * vel
 
 
 @njit(cache=True, error_model="numpy")
@@ -170,9 +176,10 @@ def deposit(code, position, velocity, radius, volume, u, v, voidage, rho, mu, dx
     KC[:, :] = 0.0
     three = velocity.shape[1] > 2
     bad = 0
-    for q in range(position.shape[0]):
-        x = position[q, 0]
-        y = position[q, 1]
+    for q_ in range(position.shape[0]):
+        q = U(q_)
+        x = position[q, U(0)]
+        y = position[q, U(1)]
         ic = min(max(int(x / dx), 0), nx - 1)
         jc = min(max(int(y / dy), 0), ny - 1)
         ci0, ci1, cw0, cw1 = _centre_axis(x, idx, nx, px)
@@ -185,11 +192,11 @@ def deposit(code, position, velocity, radius, volume, u, v, voidage, rho, mu, dx
             eps = min_voidage
         elif eps > 1.0:
             eps = 1.0
-        vx = velocity[q, 0]
-        vy = velocity[q, 1]
+        vx = velocity[q, U(0)]
+        vy = velocity[q, U(1)]
         wx = _mean(u, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1) - vx
         wy = _mean(v, ci0, ci1, cw0, cw1, fj0, fj1, fv0, fv1) - vy
-        wz = -velocity[q, 2] if three else 0.0
+        wz = -velocity[q, U(2)] if three else 0.0
         slip = math.sqrt(wx * wx + wy * wy + wz * wz)
         d = 2.0 * radius[q]
         if not _drag_arguments_valid(eps, slip, d, rg, mu):
@@ -198,7 +205,7 @@ def deposit(code, position, velocity, radius, volume, u, v, voidage, rho, mu, dx
             continue
         k = beta_per_solids(code, eps, slip, d, rg, mu, 1.0) * volume[q]  # β V_p/(1 − ε), Sun eq. 29
         kp[q] = k
-        KC[ic, jc] += k
+        KC[U(ic), U(jc)] += k
         _scatter(AU, BU, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, k, vx)
         _scatter(AV, BV, ci0, ci1, cw0, cw1, fj0, fj1, fv0, fv1, k, vy)
     _face_coefficients(AU, BU, vol, beta_u, su)
@@ -249,13 +256,14 @@ def particle_forces(position, velocity, volume, kp, u, v, p, dx, dy, px, py, pre
     idx, idy = 1.0 / dx, 1.0 / dy
     three = velocity.shape[1] > 2
     follow = total.shape[0] > 0
-    for q in range(position.shape[0]):
-        ug, vg, gx, gy = _gas_at(position[q, 0], position[q, 1], u, v, p, idx, idy, nx, ny, px, py, True,
+    for q_ in range(position.shape[0]):
+        q = U(q_)
+        ug, vg, gx, gy = _gas_at(position[q, U(0)], position[q, U(1)], u, v, p, idx, idy, nx, ny, px, py, True,
                                  pressure_force)
         k = kp[q]
-        fx = k * (ug - velocity[q, 0])
-        fy = k * (vg - velocity[q, 1])
-        fz = -k * velocity[q, 2] if three else 0.0
+        fx = k * (ug - velocity[q, U(0)])
+        fy = k * (vg - velocity[q, U(1)])
+        fz = -k * velocity[q, U(2)] if three else 0.0
         if pressure_force:  # −V_p ∇p, Sun eq. 28
             fx -= volume[q] * gx
             fy -= volume[q] * gy
@@ -275,8 +283,9 @@ def particle_forces_split(position, velocity, volume, kp, u, v, p, dx, dy, px, p
     nx, ny = p.shape
     idx, idy = 1.0 / dx, 1.0 / dy
     three = velocity.shape[1] > 2
-    for q in range(position.shape[0]):
-        ug, vg, gx, gy = _gas_at(position[q, 0], position[q, 1], u, v, p, idx, idy, nx, ny, px, py, True,
+    for q_ in range(position.shape[0]):
+        q = U(q_)
+        ug, vg, gx, gy = _gas_at(position[q, U(0)], position[q, U(1)], u, v, p, idx, idy, nx, ny, px, py, True,
                                  pressure_force)
         k = kp[q]
         ax = k * ug
@@ -284,17 +293,17 @@ def particle_forces_split(position, velocity, volume, kp, u, v, p, dx, dy, px, p
         if pressure_force:  # −V_p ∇p, Sun eq. 28
             ax -= volume[q] * gx
             ay -= volume[q] * gy
-        vx = velocity[q, 0]
-        vy = velocity[q, 1]
-        vz = velocity[q, 2] if three else 0.0
+        vx = velocity[q, U(0)]
+        vy = velocity[q, U(1)]
+        vz = velocity[q, U(2)] if three else 0.0
         c = damp[q]
-        total[q, 0] += (ax - k * vx) - (ext[q, 0] - c * vx)
-        total[q, 1] += (ay - k * vy) - (ext[q, 1] - c * vy)
+        total[q, U(0)] += (ax - k * vx) - (ext[q, U(0)] - c * vx)
+        total[q, U(1)] += (ay - k * vy) - (ext[q, U(1)] - c * vy)
         if not dim2:
-            total[q, 2] += (0.0 - k * vz) - (ext[q, 2] - c * vz)
-        ext[q, 0] = ax
-        ext[q, 1] = ay
-        ext[q, 2] = 0.0
+            total[q, U(2)] += (0.0 - k * vz) - (ext[q, U(2)] - c * vz)
+        ext[q, U(0)] = ax
+        ext[q, U(1)] = ay
+        ext[q, U(2)] = 0.0
         damp[q] = k
 
 

@@ -30,6 +30,14 @@ Hoomans' distributor), the rest rests on the bottom wall; the bed pressure drop 
 voidage the gas uses and the particles' interpolated ∇p are consistent only up to the
 mapping). With the unpaired "cell_beta" exchange the 20 × 5 d bed gave a plateau of −3.1 %
 and u_mf 0.225 m/s, so the deficit is not the exchange. Recorded as a strict xfail.
+
+Where the weight goes, sampled every gas step (``umf_budget.py 1.0 particle --profile``, 2026-11-22,
+sixth session; the gas force now with its −K v part at the sub-step's velocity): the gas carries
+0.933 m g, the bottom wall 0.062 m g (touched in 75 % of the gas steps), Δp is 0.952 W/A. The floor's
+share comes from the slugging of this narrow bed: the top layers (17-25 d) get 0.35-0.89 of their
+weight from the gas and fall back; the two lowest diameters 0.87 and 0.94 (the gas there is
+interpolated towards the inflow face's superficial velocity). Not a fault of the coupling's
+balance (gas + floor = 0.995 m g), but it keeps the plateau below the 3 % of the issue.
 """
 import math
 

@@ -31,6 +31,9 @@ from numba import njit, prange
 
 import fluidem as fd
 from fluidem.bench import load_bed_engine
+# the cell binning and counting sort the former build used are still the module's (the hard-sphere list's)
+from fluidem.particles._neighbours_kernels import _bin as _former_bin
+from fluidem.particles._neighbours_kernels import _counting_sort as _former_counting_sort
 from fluidem.particles._neighbours_kernels import build_pairs
 from fluidem.particles.softsphere import SoftSphereEngine
 
@@ -74,41 +77,6 @@ def _former_cell_grid(pos, radius, skin, dim2):
         ext = hi[d] - lo[d]
         inv[d] = ncell[d] / ext if ext > 0 else 0.0
     return lo, inv, ncell
-
-
-@njit(cache=True, error_model="numpy")
-def _former_bin(pos, lo, inv, ncell):
-    n = pos.shape[0]
-    cell = np.empty(n, dtype=np.int64)
-    for i in range(n):
-        c = 0
-        for d in range(3):
-            k = int((pos[i, d] - lo[d]) * inv[d])
-            if k >= ncell[d]:
-                k = ncell[d] - 1
-            if k < 0:
-                k = 0
-            c = c * ncell[d] + k
-        cell[i] = c
-    start, members = _former_counting_sort(cell, ncell[0] * ncell[1] * ncell[2])
-    return cell, start, members
-
-
-@njit(cache=True, error_model="numpy")
-def _former_counting_sort(key, nkeys):
-    """CSR of the indices grouped by key: (start (nkeys+1,), members (N,)), stable within a key."""
-    n = key.shape[0]
-    start = np.zeros(nkeys + 1, dtype=np.int64)
-    for i in range(n):
-        start[key[i] + 1] += 1
-    for c in range(nkeys):
-        start[c + 1] += start[c]
-    fill = start[:-1].copy()
-    members = np.empty(n, dtype=np.int64)
-    for i in range(n):
-        members[fill[key[i]]] = i
-        fill[key[i]] += 1
-    return start, members
 
 
 @njit(cache=True, error_model="numpy", inline="always")

@@ -31,52 +31,15 @@ from numba import njit, prange
 
 import fluidem as fd
 from fluidem.bench import load_bed_engine
-# the cell binning and counting sort the former build used are still the module's (the hard-sphere list's)
+# the cell grid, binning and counting sort of the former build are still the module's (the hard-sphere list's;
+# ``_cell_grid`` rewritten with the same results)
+from fluidem.particles._neighbours_kernels import _cell_grid as _former_cell_grid
 from fluidem.particles._neighbours_kernels import _bin as _former_bin
 from fluidem.particles._neighbours_kernels import _counting_sort as _former_counting_sort
 from fluidem.particles._neighbours_kernels import build_pairs
 from fluidem.particles.softsphere import SoftSphereEngine
 
 # ---- the former build (git 08d3e90), frozen for the comparison ---------------------------------------------
-
-
-@njit(cache=True, error_model="numpy")
-def _former_cell_grid(pos, radius, skin, dim2):
-    n = pos.shape[0]
-    lo = np.empty(3)
-    hi = np.empty(3)
-    for d in range(3):
-        lo[d] = np.inf
-        hi[d] = -np.inf
-    rmax = 0.0
-    for i in range(n):
-        for d in range(3):
-            x = pos[i, d]
-            if x < lo[d]:
-                lo[d] = x
-            if x > hi[d]:
-                hi[d] = x
-        if radius[i] > rmax:
-            rmax = radius[i]
-    size = 2.0 * rmax + skin
-    ncell = np.ones(3, dtype=np.int64)
-    # grow cells if a stray particle would make the grid too large
-    while True:
-        total = 1
-        for d in range(3):
-            if dim2 and d == 2:
-                ncell[d] = 1
-            else:
-                ncell[d] = max(1, int((hi[d] - lo[d]) / size))
-            total *= ncell[d]
-        if total <= 4 * n + 64:
-            break
-        size *= 1.5
-    inv = np.empty(3)
-    for d in range(3):
-        ext = hi[d] - lo[d]
-        inv[d] = ncell[d] / ext if ext > 0 else 0.0
-    return lo, inv, ncell
 
 
 @njit(cache=True, error_model="numpy", inline="always")

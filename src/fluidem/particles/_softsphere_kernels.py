@@ -432,7 +432,7 @@ def _gather_parallel(pos, vel, omega, radius, mass, species, pw, wall_now, wall_
 
 
 @njit(cache=True, error_model="numpy")
-def gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
+def gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal, wall_axis,
                   wall_hist, wall_touch, gravity, ext_force, ext_damping, dim2, sum_f, sum_c, t, dt, force, torque, inv_mass, inv_inertia,
                   mode, ref_pos, limit2, parallel):
     """Total force and torque per particle: contact sums, walls, gravity, external force.
@@ -442,10 +442,10 @@ def gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_
     the next step's half kick and drift. Returns how many particles moved more
     than sqrt(limit2) from ``ref_pos`` (mode 2), else 0. Leaves sum_f and sum_c zero.
     ``wall_touch`` (N, W) bool: False where wall_hist[i, w] is zero (see touching_walls); kept so.
+    ``wall_axis``: ``wall_axes(wall_normal)``, made once by the caller (the walls' normals do not change).
     Each particle's arithmetic is the same on any number of threads (``parallel`` False: no parallel region).
     """
     wall_now = walls_now(wall_motion, wall_point0, t)
-    wall_axis = wall_axes(wall_normal)
     n = pos.shape[0]
     if parallel and n > GATHER_CHUNK:
         return _gather_parallel(pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_axis, wall_hist,
@@ -493,8 +493,8 @@ def compute_forces(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, 
     sum_c = np.zeros_like(force)
     pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
                 dt, update, sum_f, sum_c, parallel)
-    gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal, wall_hist,
-                  touching_walls(wall_hist), gravity, ext_force, ext_damping, dim2, sum_f, sum_c, t, dt, force, torque, mass, mass, 0, pos, 0.0, parallel)
+    gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
+                  wall_axes(wall_normal), wall_hist, touching_walls(wall_hist), gravity, ext_force, ext_damping, dim2, sum_f, sum_c, t, dt, force, torque, mass, mass, 0, pos, 0.0, parallel)
 
 
 @njit(cache=True, error_model="numpy")
@@ -524,6 +524,7 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
     if nsteps <= 0:
         return row_start, partner, hist, slab_start, slab_members, rebuilds
     wall_touch = touching_walls(wall_hist)
+    wall_axis = wall_axes(wall_normal)
     moved = _kick_drift(pos, vel, omega, force, torque, inv_mass, inv_inertia, dt, ref_pos, limit2)
     for s in range(nsteps):
         t = (step0 + s + 1) * dt
@@ -535,6 +536,6 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
                     dt, True, sum_f, sum_c, parallel)
         mode = 2 if s < nsteps - 1 else 1
         moved = gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
-                              wall_hist, wall_touch, gravity, ext_force, ext_damping, dim2, sum_f, sum_c, t, dt, force, torque, inv_mass,
+                              wall_axis, wall_hist, wall_touch, gravity, ext_force, ext_damping, dim2, sum_f, sum_c, t, dt, force, torque, inv_mass,
                               inv_inertia, mode, ref_pos, limit2, parallel)
     return row_start, partner, hist, slab_start, slab_members, rebuilds

@@ -171,6 +171,27 @@ def build_neighbours(pos, radius, skin, dim2):
     return start, nbr
 
 
+@njit(cache=True, error_model="numpy")
+def upper_half(start, nbr):
+    """The entries j > i of each row i of a full neighbour list, in the row's order: (start (N+1,) uint64,
+    neighbours uint32), what ``_predict_all`` walks (each pair once, without a data-dependent skip)."""
+    n = start.shape[0] - 1
+    up_start = np.zeros(n + 1, dtype=np.uint64)
+    for i in range(n):
+        k = 0
+        for p in range(start[i], start[i + 1]):
+            k += nbr[p] > i
+        up_start[i + 1] = up_start[i] + k
+    up = np.empty(up_start[n] + 1, dtype=np.uint32)  # + 1: the slot written after the last kept entry
+    k = 0
+    for i in range(n):
+        for p in range(start[i], start[i + 1]):
+            j = nbr[p]
+            up[k] = j
+            k += j > i
+    return up_start, up[:k]
+
+
 # ---------------------------------------------------------------- collision law
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
 def impulse(nx, ny, nz, ux, uy, uz, inv_ma, inv_mb, ka, kb, e, mu):
@@ -503,13 +524,18 @@ def _predict(i, t, t_end, P, nbr_start, nbr, walls, R, half_skin, ncoll, ev, pla
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _predict_all(t, t_end, P, nbr_start, nbr, walls, R, half_skin, ncoll, ev, ev_time, T, L, planar, partf):
+def _predict_all(t, t_end, P, up_start, up, walls, R, half_skin, ncoll, ev, ev_time, T, L, planar, partf):
     """Events of all particles, all with their clocks at t (the start of a step or a list rebuild).
 
-    Each pair of the (full, symmetric) list is solved once, from its lower index, and offered to both
-    particles: eq. 30 gives the same time for (i, j) and (j, i) (r and v only change sign). The pruning
-    bound of ``_scan`` is the step's end here, as the partner's best is not known yet. ``partf`` (N,): scratch.
-    Equal times go to the first offer: walls, then the partners in the order the pairs are met."""
+    Each pair is solved once, from its lower index (``up_start, up``: the upper half of the neighbour list,
+    ``upper_half``), and offered to both particles: eq. 30 gives the same time for (i, j) and (j, i) (r and v
+    only change sign). The pruning bound of ``_scan`` is the step's end here, as the partner's best is not
+    known yet. ``partf`` (N,): scratch. Equal times go to the first offer: walls, then the partners in the
+    order the pairs are met.
+
+    Unlike ``_scan``, this loop branches on the cheap test that a root may lie inside the step, and solves
+    eq. 30 only then: at the start of a step the pairs that collide before its end are few and the branch
+    is well predicted (hoomans-orifice jet: about 420 collisions per step among 6,200 listed pairs)."""
     n = ev_time.shape[0]
     for i in range(n):
         o = P_ROW * i
@@ -530,10 +556,8 @@ def _predict_all(t, t_end, P, nbr_start, nbr, walls, R, half_skin, ncoll, ev, ev
         pf = partf[i]
         fi = float(i)
         span = t_end - t
-        for p in range(nbr_start[i], nbr_start[i + 1]):
-            j = nbr[p]
-            if j < i:  # met from j's row
-                continue
+        for p in range(up_start[i], up_start[i + 1]):
+            j = up[p]
             q = P_ROW * j
             vx = vxi - P[q + P_VX]
             vy = vyi - P[q + P_VY]
@@ -545,14 +569,17 @@ def _predict_all(t, t_end, P, nbr_start, nbr, walls, R, half_skin, ncoll, ev, ev
             else:
                 vz = vzi - P[q + P_VZ]
                 rz = zi - P[q + P_Z]
-            tc = _pair_time(rx, ry, rz, vx, vy, vz, ri + P[q + P_R], t, span)
-            better = tc < best
-            best = tc if better else best
-            pf = float(j) if better else pf
-            bj = ev_time[j]
-            better = tc < bj
-            ev_time[j] = tc if better else bj
-            partf[j] = fi if better else partf[j]
+            b = rx * vx + ry * vy + rz * vz
+            sig = ri + P[q + P_R]
+            c = rx * rx + ry * ry + rz * rz - sig * sig
+            if (b < 0.0) & ((c <= 0.0) | (c < -2.0 * b * span)):  # else no root inside the step (_pair_time)
+                tc = _pair_time(rx, ry, rz, vx, vy, vz, sig, t, span)
+                if tc < best:
+                    best = tc
+                    pf = float(j)
+                if tc < ev_time[j]:
+                    ev_time[j] = tc
+                    partf[j] = fi
         ev_time[i] = best
         partf[i] = pf
     for i in range(n):
@@ -745,8 +772,8 @@ def _events(t_abs0, dt, P, Q, species, pp, pw, walls, wall_normal, nbr_start, nb
 
 @njit(cache=True, error_model="numpy")
 def advance(pos, vel, omega, radius, inv_mass, inv_inertia, species, pp, pw, wall_point, wall_normal, gravity,
-            ext_force, dim2, nbr_start, nbr, ref_pos, skin, last_coll, step0, dt, nsteps, max_events, counters,
-            energy, log, info, work):
+            ext_force, dim2, nbr_start, nbr, up_start, up, ref_pos, skin, last_coll, step0, dt, nsteps, max_events,
+            counters, energy, log, info, work):
     """Run ``nsteps`` force steps of length ``dt`` (Hoomans 1996 Fig. 3 per step).
 
     Parameters
@@ -757,6 +784,7 @@ def advance(pos, vel, omega, radius, inv_mass, inv_inertia, species, pp, pw, wal
     wall_point, wall_normal : (W, 3) static wall planes (inward normals)
     gravity : (3,) [m/s²]; ext_force : (N, 3) [N], constant over a step (the gas force)
     nbr_start, nbr : full neighbour list of ``ref_pos`` (N, 3) with cut-off R_i + R_j + skin
+    up_start, up : its upper half, ``upper_half(nbr_start, nbr)``
     last_coll : (N,) absolute time of each particle's last collision [s] (TC model)
     step0 : index of the first step (absolute time of step s is (step0 + s) dt)
     max_events : events per step after which the call stops with status TOO_MANY_EVENTS
@@ -766,7 +794,7 @@ def advance(pos, vel, omega, radius, inv_mass, inv_inertia, species, pp, pw, wal
     info : (3,) float64, on failure (step index, time in step, events)
     work : ``workspace(N)``
 
-    Returns (nbr_start, nbr, status); status OK or TOO_MANY_EVENTS. On OK, pos, vel, omega,
+    Returns (nbr_start, nbr, up_start, up, status); status OK or TOO_MANY_EVENTS. On OK, pos, vel, omega,
     ref_pos and last_coll hold the new state; on TOO_MANY_EVENTS they are left as they were
     (counters, energy and the returned lists are then mid-step: the caller keeps its copies).
     """
@@ -796,7 +824,7 @@ def advance(pos, vel, omega, radius, inv_mass, inv_inertia, species, pp, pw, wal
             if not dim2:
                 P[o + P_VZ] += (gz + ext_force[i, 2] * im) * dt
             P[o + P_T] = 0.0
-        _predict_all(0.0, dt, P, nbr_start_u, nbr_u, walls, R, half_skin, ncoll, ev, ev_time, T, L, planar, F)
+        _predict_all(0.0, dt, P, up_start, up, walls, R, half_skin, ncoll, ev, ev_time, T, L, planar, F)
         events = np.int64(0)
         t = 0.0
         while n > 0:
@@ -813,16 +841,17 @@ def advance(pos, vel, omega, radius, inv_mass, inv_inertia, species, pp, pw, wal
             nbr_start, nbr = build_neighbours(X, radius, skin, dim2)
             nbr_start_u = nbr_start.view(np.uint64)
             nbr_u = nbr.view(np.uint32)
+            up_start, up = upper_half(nbr_start, nbr)
             _set_reference(X, radius, walls, skin, R, ev_time)
             counters[C_REBUILDS] += 1
             rebuilt = True
-            _predict_all(t, dt, P, nbr_start_u, nbr_u, walls, R, half_skin, ncoll, ev, ev_time, T, L, planar, F)
+            _predict_all(t, dt, P, up_start, up, walls, R, half_skin, ncoll, ev, ev_time, T, L, planar, F)
         counters[C_EVENTS] += events
         if reason == EV_LIMIT:
             info[0] = s
             info[1] = t
             info[2] = events
-            return nbr_start, nbr, TOO_MANY_EVENTS
+            return nbr_start, nbr, up_start, up, TOO_MANY_EVENTS
         for i in range(n):  # free flight to the end of the step
             _move(i, dt, P)
     for i in range(n):
@@ -842,4 +871,4 @@ def advance(pos, vel, omega, radius, inv_mass, inv_inertia, species, pp, pw, wal
             ref_pos[i, 0] = R[R_ROW * i + R_X]
             ref_pos[i, 1] = R[R_ROW * i + R_Y]
             ref_pos[i, 2] = R[R_ROW * i + R_Z]
-    return nbr_start, nbr, status
+    return nbr_start, nbr, up_start, up, status

@@ -79,6 +79,7 @@ class HardSphereEngine:
         self.last_collision = np.full(st.n, -np.inf)  # absolute time of each particle's last collision [s]
         self.ref_pos = st.position.copy()
         self.nbr_start, self.nbr = K.build_neighbours(st.position, st.radius, self.skin, self.dim2)
+        self.up_start, self.up = K.upper_half(self.nbr_start, self.nbr)  # derived: each pair once
         self.event_log = np.zeros((0, 5))  # see record_collisions()
         self._work = None  # the kernel's work arrays (K.workspace), made at the first step
         # what analysis/probes.py reads from a particle engine: no lasting contacts between hard spheres
@@ -172,10 +173,10 @@ class HardSphereEngine:
         info = np.zeros(3)
         if self._work is None or self._work[0].shape[0] != K.P_ROW * st.n:
             self._work = K.workspace(st.n)
-        nbr_start, nbr, status = K.advance(
+        nbr_start, nbr, up_start, up, status = K.advance(
             st.position, st.velocity, st.omega, st.radius, self.inv_mass, self.inv_inertia, st.species, self.pp,
             self.pw, self.wall_point0, self.wall_normal, self.gravity, self.ext_force, self.dim2, self.nbr_start,
-            self.nbr, self.ref_pos, self.skin, self.last_collision, self.steps, self.dt, nsteps,
+            self.nbr, self.up_start, self.up, self.ref_pos, self.skin, self.last_collision, self.steps, self.dt, nsteps,
             self.max_events_per_step, self.counters, self.energy, self.event_log, info, self._work)
         if status != K.OK:  # the kernel left the particle arrays as they were
             self.counters[...] = counters
@@ -192,7 +193,7 @@ class HardSphereEngine:
                    f"stay elastic under it; try collapse_time = 0. ")
                 + f"A box width that is not a whole number of diameters, a size distribution or a smaller "
                   f"time.dt also help. The particles are left as they were at t = {self.time:.6g} s")
-        self.nbr_start, self.nbr = nbr_start, nbr
+        self.nbr_start, self.nbr, self.up_start, self.up = nbr_start, nbr, up_start, up
         self.steps += nsteps
         self.time = self.steps * self.dt
         self._update_force()
@@ -266,6 +267,7 @@ class HardSphereEngine:
             getattr(self, k)[...] = arrays[f"engine/{k}"]
         self.nbr_start = np.ascontiguousarray(arrays["engine/nbr_start"], dtype=np.int64)
         self.nbr = np.ascontiguousarray(arrays["engine/nbr"], dtype=np.int32)
+        self.up_start, self.up = K.upper_half(self.nbr_start, self.nbr)
         self.counters[K.C_LOGGED] = 0
         self.event_log = np.zeros((0, 5))
         self.dt = float(scalars["dt"])

@@ -50,6 +50,8 @@ def main() -> None:
     ap.add_argument("--from", dest="run_dir", help="run directory with restart.h5 (problem 'coupled')")
     ap.add_argument("--bursts", type=int, default=20, help="bursts per version")
     ap.add_argument("--per", type=int, default=0, help="steps per burst (default 200 DEM / 50 gas steps)")
+    ap.add_argument("--threads", type=int, default=None,
+                    help="threads of the coupled run (default: the case's, one below 4000 particles)")
     args = ap.parse_args()
     if args.problem == "coupled" and not args.run_dir:
         ap.error("--problem coupled needs --from RUN_DIR")
@@ -67,7 +69,7 @@ def main() -> None:
             else:
                 copy = tmp / f"run_{name}"
                 shutil.copytree(args.run_dir, copy)
-                sim = mod.Simulation.resume(copy)
+                sim = mod.Simulation.resume(copy, threads=args.threads)
                 per = args.per or 50
                 k = per * sim.gas.substeps
                 runs[name] = (sim, lambda s=sim, k=k: s.step_once(k), per)

@@ -13,6 +13,9 @@ class ParticleState:
     position, velocity, omega, force, torque : (N, 3) float64 [m, m/s, rad/s, N, N m]
     radius, mass, inertia : (N,) float64 [m, kg, kg m^2]
     species : (N,) int64 index into the case's species list
+    ids : (N,) int64 each particle's number at creation (0 … N−1). A soft-sphere engine may renumber its
+        particles in cell order for speed (``neighbours.reorder_interval``); ``ids`` follows them, and
+        output files list the particles by it.
     """
 
     position: np.ndarray
@@ -24,6 +27,11 @@ class ParticleState:
     mass: np.ndarray
     inertia: np.ndarray
     species: np.ndarray
+    ids: np.ndarray | None = None
+
+    def __post_init__(self):
+        if self.ids is None:
+            self.ids = np.arange(self.position.shape[0], dtype=np.int64)
 
     @classmethod
     def create(cls, position, velocity, diameter, species, densities) -> "ParticleState":
@@ -39,7 +47,7 @@ class ParticleState:
             radius=radius,
             mass=mass,
             inertia=0.4 * mass * radius**2,  # solid sphere
-            species=np.asarray(species, np.int64),
+            species=np.ascontiguousarray(species, np.int64),
         )
 
     @property

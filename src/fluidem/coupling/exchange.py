@@ -98,6 +98,8 @@ class GasCoupling:
         self._face_beta = (np.zeros(gd.u_shape), np.zeros(gd.v_shape))
         self._face_solids = (np.zeros(gd.u_shape), np.zeros(gd.v_shape))
         self._cell_inputs = None  # β, v_s,x, v_s,y per cell of the "cell" exchange
+        if hasattr(engine, "reorder_listeners"):  # per-particle arrays here follow the engine's renumbering
+            engine.reorder_listeners.append(self._reorder)
         self._paired_ready = False  # K_p / cell inputs of a gas step at hand (else forces as "cell_beta")
         xc, yc = I._axes(self.grid, "centre")[:2]
         self._nodes = (xc, yc, self.grid.x_faces, self.grid.y_faces)  # interpolation nodes, Hoomans eqs 40-41
@@ -111,6 +113,12 @@ class GasCoupling:
         self.clipped = smap.clipped
 
     # ------------------------------------------------------------ pieces
+    def _reorder(self, order) -> None:
+        """The engine renumbered its particles (new k is former order[k]): so do the per-particle arrays here."""
+        self.volume = self.volume[order]
+        if self._kp.shape == order.shape:
+            self._kp = self._kp[order]
+
     def _map(self):
         """particles → grid at the current positions: a ``SolidsMap`` (Sun 2007 eqs 34-35 / Hoomans eqs 49-50)."""
         st = self._particles()

@@ -47,14 +47,17 @@ class ParticleWriter:
             g = grp.create_group(key)
             g.attrs["time"] = sim.time
             g.attrs["step"] = sim.step
-            g["position"] = st.position
-            g["velocity"] = st.velocity
-            g["omega"] = st.omega
-            g["diameter"] = 2.0 * st.radius
-            g["species"] = st.species.astype(np.int32)
-            g["id"] = np.arange(st.n, dtype=np.int64)
+            # rows in the order of the particles' ids (a soft-sphere engine may renumber its particles in
+            # cell order, state.ids follows them): row k is particle k in every snapshot
+            by_id = _id_order(st.ids)
+            g["position"] = st.position[by_id]
+            g["velocity"] = st.velocity[by_id]
+            g["omega"] = st.omega[by_id]
+            g["diameter"] = 2.0 * st.radius[by_id]
+            g["species"] = st.species[by_id].astype(np.int32)
+            g["id"] = st.ids[by_id]
             for name, fn in self.extra_fields.items():
-                g[name] = fn(sim)
+                g[name] = np.asarray(fn(sim))[by_id]
             fields = _field_layout(g)
         self._times.append((key, float(sim.time)))
         write_text_atomic(self.xdmf, xdmf_text(self.path.name, self._times, st.n, fields))
@@ -72,6 +75,13 @@ class ParticleWriter:
             n = grp[times[0][0]]["position"].shape[0] if times else 0
             fields = _field_layout(grp[times[-1][0]]) if times else None
         write_text_atomic(self.xdmf, xdmf_text(self.path.name, times, n, fields))
+
+
+def _id_order(ids: np.ndarray):
+    """Index putting the rows in id order: a slice if they are in it already."""
+    if ids.size == 0 or (ids[0] == 0 and np.all(np.diff(ids) == 1)):
+        return slice(None)
+    return np.argsort(ids, kind="stable")
 
 
 def _times(grp) -> list[tuple[str, float]]:

@@ -409,6 +409,57 @@ def build_pairs(pos, radius, skin, dim2, expected=0):
     return row_start, partner, slab_start, slab_members
 
 
+@njit(cache=True, error_model="numpy")
+def cell_order(pos, radius, skin, dim2):
+    """(N,) int64: the particles ordered by slab, then by cell (x-major), then by index, with the slabs and
+    cells of ``build_pairs`` (new particle k is old particle order[k]).
+
+    Numbered so, the particles of a slab are one run of memory and a pair's two ends lie close: the force
+    loops then walk their arrays in order, and two threads working on different slabs no longer write into
+    the same cache lines (see ``_softsphere_kernels.reorder``)."""
+    n = pos.shape[0]
+    lo, hi, rmax = _bounds(pos, radius)
+    inv, ncell = _grid(lo, hi, rmax, skin, dim2, n)
+    slab_start, _, _, _, key, _ = _sort_by_cell(pos, radius, lo, hi, rmax, skin, dim2, 64, inv, ncell)
+    fill = slab_start[:-1].copy()
+    order = np.empty(n, dtype=np.int64)
+    for m in range(n):  # slots in cell order, dealt into their slabs (stable)
+        k = key[U(m)]
+        s = k >> 32
+        q = fill[U(s)]
+        fill[U(s)] = q + 1
+        order[U(q)] = k & 0xFFFFFFFF
+    return order
+
+
+@njit(cache=True, error_model="numpy")
+def renumber_pairs(row_start, partner, hist, new_index):
+    """The half list (row_start, partner, hist) with particle i renamed new_index[i]: rows by new owner,
+    partners ascending (what ``carry_history`` searches); a pair keeps its owner and its history."""
+    n = row_start.shape[0] - 1
+    npair = partner.shape[0]
+    keys = np.empty(npair, dtype=np.int64)
+    for i in range(n):
+        a = new_index[U(i)]
+        for p in range(row_start[U(i)], row_start[U(i + 1)]):
+            keys[U(p)] = (a << 32) | new_index[U(partner[U(p)])]
+    order = np.argsort(keys)  # keys are distinct: the order is unique
+    new_start = np.zeros(n + 1, dtype=np.int64)
+    new_partner = np.empty(npair, dtype=np.int32)
+    new_hist = np.empty((npair, 3))
+    for q in range(npair):
+        p = order[U(q)]
+        k = keys[U(p)]
+        new_start[U((k >> 32) + 1)] += 1
+        new_partner[U(q)] = k & 0xFFFFFFFF
+        new_hist[U(q), U(0)] = hist[U(p), U(0)]
+        new_hist[U(q), U(1)] = hist[U(p), U(1)]
+        new_hist[U(q), U(2)] = hist[U(p), U(2)]
+    for i in range(n):
+        new_start[U(i + 1)] += new_start[U(i)]
+    return new_start, new_partner, new_hist
+
+
 @njit(cache=True, error_model="numpy", inline="always")
 def _find(start, partner, i, j):
     """Slot of partner j in the sorted row i, or −1."""

@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from ._neighbours_kernels import build_pairs, carry_history
+from ._neighbours_kernels import build_pairs, carry_history, cell_order, renumber_pairs
 from .contact._dispatch import contact_force
 from .contact.base import N_SLOTS
 
@@ -485,6 +485,45 @@ def rebuild(pos, radius, skin, dim2, row_start, partner, hist, ref_pos):
 
 
 @njit(cache=True, error_model="numpy")
+def _permute(a, order):
+    """a[k] = a[order[k]] along the first axis, in place (a 2D and C-contiguous)."""
+    old = a.copy()
+    for k in range(a.shape[0]):
+        src = U(order[U(k)])
+        for c in range(a.shape[1]):
+            a[U(k), U(c)] = old[src, U(c)]
+
+
+@njit(cache=True, error_model="numpy")
+def reorder(pos, vel, omega, force, torque, radius, mass, inertia, inv_mass, inv_inertia, species, ids, ext_force,
+            ext_damping, wall_hist, row_start, partner, hist, skin, dim2):
+    """Renumber the particles in slab and cell order (``cell_order``): every per-particle array is permuted
+    in place, the half list renamed (``renumber_pairs``; the caller rebuilds it). Returns (order, row_start,
+    partner, hist): new particle k is former particle order[k]; ``ids`` keeps each particle's original number.
+
+    Why: particles numbered at random (a random fill, or a bed after seconds of bubbling) make the pair loop
+    read its partners all over memory and, on two threads, make threads working on different slabs write
+    into the same cache lines of the force sums (false sharing). In slab order each thread writes its own
+    run. Every array is permuted alike, so the physics is unchanged; sums of forces are taken in another
+    order, so results differ from an unsorted run at round-off level (and are again the same for any
+    number of threads)."""
+    n = pos.shape[0]
+    order = cell_order(pos, radius, skin, dim2)
+    new_index = np.empty(n, dtype=np.int64)
+    for k in range(n):
+        new_index[U(order[U(k)])] = k
+    for a in (pos, vel, omega, force, torque, ext_force):
+        _permute(a, order)
+    for b in (radius, mass, inertia, inv_mass, inv_inertia, ext_damping):
+        _permute(b.reshape((n, 1)), order)
+    _permute(species.reshape((n, 1)), order)
+    _permute(ids.reshape((n, 1)), order)
+    _permute(wall_hist.reshape((n, wall_hist.shape[1] * 3)), order)
+    row_start, partner, hist = renumber_pairs(row_start, partner, hist, new_index)
+    return order, row_start, partner, hist
+
+
+@njit(cache=True, error_model="numpy")
 def compute_forces(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, wall_point0, wall_normal,
                    wall_hist, gravity, ext_force, ext_damping, dim2, row_start, partner, hist, slab_start, slab_members,
                    t, dt, update, force, torque, parallel):
@@ -500,7 +539,8 @@ def compute_forces(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, 
 @njit(cache=True, error_model="numpy")
 def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia, species, pp, pw,
             wall_motion, wall_point0, wall_normal, wall_hist, gravity, ext_force, ext_damping, dim2,
-            row_start, partner, hist, slab_start, slab_members, ref_pos, skin, step0, dt, nsteps, parallel):
+            row_start, partner, hist, slab_start, slab_members, ref_pos, skin, step0, dt, nsteps, parallel,
+            inertia, ids, reorder_interval, last_reorder):
     """Run ``nsteps`` velocity-Verlet DEM steps from step ``step0`` (time step0 * dt).
 
     Order of one step::
@@ -516,19 +556,35 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
     separate passes, so chunking a run differently does not change it.
     The list arrays change size on rebuild, so they are returned with the rebuild count.
     ``parallel`` (more than one thread) selects the parallel force loops; the sums are the same.
+
+    Reordering: at a rebuild at least ``reorder_interval`` steps (> 0) after step ``last_reorder``,
+    the particles are renumbered in cell order first (``reorder``). Tied to rebuilds and step numbers
+    only, so a run gives the same result however it is cut into calls. Also returns the step of the
+    last reordering, the number of them in this call and their combined order (new k is former
+    order[k]; empty if none).
     """
     limit2 = (0.5 * skin) ** 2
     sum_f = np.zeros_like(force)
     sum_c = np.zeros_like(force)
     rebuilds = 0
+    reorders = 0
+    combined = np.empty(0, dtype=np.int64)
     if nsteps <= 0:
-        return row_start, partner, hist, slab_start, slab_members, rebuilds
+        return row_start, partner, hist, slab_start, slab_members, rebuilds, last_reorder, 0, combined
     wall_touch = touching_walls(wall_hist)
     wall_axis = wall_axes(wall_normal)
     moved = _kick_drift(pos, vel, omega, force, torque, inv_mass, inv_inertia, dt, ref_pos, limit2)
     for s in range(nsteps):
         t = (step0 + s + 1) * dt
         if moved > 0:
+            if reorder_interval > 0 and step0 + s - last_reorder >= reorder_interval:
+                order, row_start, partner, hist = reorder(
+                    pos, vel, omega, force, torque, radius, mass, inertia, inv_mass, inv_inertia, species, ids,
+                    ext_force, ext_damping, wall_hist, row_start, partner, hist, skin, dim2)
+                combined = order if combined.shape[0] == 0 else combined[order]
+                wall_touch = touching_walls(wall_hist)
+                last_reorder = step0 + s
+                reorders += 1
             row_start, partner, hist, slab_start, slab_members = rebuild(
                 pos, radius, skin, dim2, row_start, partner, hist, ref_pos)
             rebuilds += 1
@@ -538,4 +594,4 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
         moved = gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
                               wall_axis, wall_hist, wall_touch, gravity, ext_force, ext_damping, dim2, sum_f, sum_c, t, dt, force, torque, inv_mass,
                               inv_inertia, mode, ref_pos, limit2, parallel)
-    return row_start, partner, hist, slab_start, slab_members, rebuilds
+    return row_start, partner, hist, slab_start, slab_members, rebuilds, last_reorder, reorders, combined

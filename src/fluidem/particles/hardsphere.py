@@ -17,7 +17,7 @@ from ..state import ParticleState
 from . import _hardsphere_kernels as K
 from .contact.base import N_SLOTS
 from .contact.hard_sphere import HardSphere
-from .softsphere import SoftSphereEngine, set_up_particles
+from .softsphere import SoftSphereEngine, restore_state, set_up_particles
 from .walls import build_walls
 
 DEFAULT_DT = 1e-4  # s, Hoomans 1996 DT (Table 2, §5.1)
@@ -261,8 +261,7 @@ class HardSphereEngine:
                 "skin": self.skin}
 
     def restore(self, arrays: dict[str, np.ndarray], scalars: dict) -> None:
-        for k in self.state.arrays():
-            getattr(self.state, k)[...] = arrays[f"state/{k}"]
+        restore_state(self.state, arrays)
         for k in ("ref_pos", "last_collision", "ext_force", "counters", "energy"):
             getattr(self, k)[...] = arrays[f"engine/{k}"]
         self.nbr_start = np.ascontiguousarray(arrays["engine/nbr_start"], dtype=np.int64)

@@ -20,6 +20,10 @@ from .placement import place
 from .walls import build_walls
 
 STABILITY_FRACTION = 0.1  # dt must stay below t_c / 10: at least ten steps per contact
+# default renumbering in cell order (neighbours.reorder_interval): every 1000 steps, at the next list rebuild
+# (as LAMMPS sorts its atoms), for beds of 1000 particles and more; smaller ones keep their numbering
+REORDER_INTERVAL = 1000
+REORDER_MIN_PARTICLES = 1000
 
 
 
@@ -37,6 +41,19 @@ def set_up_particles(engine, case, state: ParticleState | None) -> ParticleState
     engine.gravity = np.array(case.gravity, float)
     engine.ext_force = np.zeros_like(state.position)
     return state
+
+
+def restore_state(state: ParticleState, arrays: dict[str, np.ndarray]) -> None:
+    """Copy a checkpoint's ``state/…`` arrays into ``state`` (checkpoints from before ``ids`` existed:
+    particles numbered as created)."""
+    for k, a in state.arrays().items():
+        key = f"state/{k}"
+        if key in arrays:
+            a[...] = arrays[key]
+        elif k == "ids":
+            a[...] = np.arange(a.shape[0])
+        else:
+            raise KeyError(key)
 
 
 class SoftSphereEngine:
@@ -63,6 +80,10 @@ class SoftSphereEngine:
         self.row_start, self.partner, self.slab_start, self.slab_members = build_pairs(
             st.position, st.radius, self.skin, self.dim2)
         self.hist = np.zeros((self.partner.shape[0], 3))
+        self.reorder_interval = self._reorder_interval()
+        self.last_reorder = 0  # step of the last renumbering in cell order (see advance)
+        self.reorders = 0
+        self.reorder_listeners = []  # callables f(order) told of each renumbering (new k is former order[k])
         self._compute_forces(update=False)
 
     # ------------------------------------------------------------ set-up
@@ -113,6 +134,14 @@ class SoftSphereEngine:
                     times.append((law.contact_time(m_min[a], r_min[a], v, sp[a], plane.source),
                                   f"species {sp[a].name}–wall {plane.name}"))
         return pp, pw, times
+
+    def _reorder_interval(self) -> int:
+        """Steps between renumberings of the particles in cell order: the case's ``neighbours.reorder_interval``,
+        or by default REORDER_INTERVAL from REORDER_MIN_PARTICLES particles on (0: never)."""
+        k = self.case.neighbours.reorder_interval
+        if k is not None:
+            return int(k)
+        return REORDER_INTERVAL if self.state.n >= REORDER_MIN_PARTICLES else 0
 
     def _time_step(self) -> float:
         t = self.case.time
@@ -175,15 +204,21 @@ class SoftSphereEngine:
         if nsteps <= 0:
             return
         st = self.state
-        (self.row_start, self.partner, self.hist, self.slab_start, self.slab_members, nreb) = K.advance(
+        (self.row_start, self.partner, self.hist, self.slab_start, self.slab_members, nreb, last_reorder,
+         nreorder, order) = K.advance(
             st.position, st.velocity, st.omega, st.force, st.torque, st.radius, st.mass, self.inv_mass,
             self.inv_inertia, st.species, self.pp, self.pw, self.wall_motion, self.wall_point0, self.wall_normal,
             self.wall_hist, self.gravity, self.ext_force, self.ext_damping, self.dim2, self.row_start, self.partner, self.hist,
             self.slab_start, self.slab_members, self.ref_pos, self.skin, self.steps, self.dt, nsteps,
-            numba.get_num_threads() > 1)
+            numba.get_num_threads() > 1, st.inertia, st.ids, self.reorder_interval, self.last_reorder)
         self.steps += nsteps
         self.time = self.steps * self.dt
         self.rebuilds += nreb
+        if nreorder:
+            self.reorders += int(nreorder)
+            self.last_reorder = int(last_reorder)
+            for f in self.reorder_listeners:
+                f(order)
 
     # ------------------------------------------------------------ checkpoint
     def checkpoint_arrays(self) -> dict[str, np.ndarray]:
@@ -198,11 +233,13 @@ class SoftSphereEngine:
         return out
 
     def checkpoint_scalars(self) -> dict:
-        return {"steps": self.steps, "dt": self.dt, "rebuilds": self.rebuilds}
+        return {"steps": self.steps, "dt": self.dt, "rebuilds": self.rebuilds, "last_reorder": self.last_reorder,
+                "reorders": self.reorders}
 
     def restore(self, arrays: dict[str, np.ndarray], scalars: dict) -> None:
-        for k in self.state.arrays():
-            getattr(self.state, k)[...] = arrays[f"state/{k}"]
+        restore_state(self.state, arrays)
+        self.last_reorder = int(scalars.get("last_reorder", 0))
+        self.reorders = int(scalars.get("reorders", 0))
         for k in ("wall_hist", "ref_pos", "ext_force"):
             getattr(self, k)[...] = arrays[f"engine/{k}"]
         self.ext_damping[...] = arrays.get("engine/ext_damping", 0.0)  # checkpoints before it existed: none

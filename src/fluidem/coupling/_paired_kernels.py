@@ -30,13 +30,19 @@ boundary.
 Array indices in the per-particle loops are cast to unsigned (``U``): Numba adds wrap-around code
 for negative values to every access with a signed index (tsuji-jet bed at 1.5 s, one thread,
 bitwise the same results: ``deposit`` 245 → 209 µs, ``particle_forces_split`` 204 → 158 µs).
+
+With more than one thread (``parallel`` True) ``particle_forces_split`` splits the particles into
+chunks, and ``deposit`` computes every K_p so (the interpolation and the drag law, most of its work),
+then adds them into the face sums in one serial pass in particle order: each number is computed as
+on one thread, so the results are bitwise the same for any number of threads.
 """
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 U = np.uintp  # unsigned array index: no wrap-around code (module docstring)
+CHUNK = 256  # particles per work item of the parallel variants (``parallel`` True)
 
 from ._exchange_kernels import _cell, _drag_arguments_valid, store_force
 from .drag._dispatch import beta_per_solids
@@ -156,7 +162,7 @@ def _scatter(A, B, i0, i1, a0, a1, j0, j1, b0, b1, k, vel):
 
 @njit(cache=True, error_model="numpy")
 def deposit(code, position, velocity, radius, volume, u, v, voidage, rho, mu, dx, dy, min_voidage, px, py, kp,
-            AU, BU, AV, BV, KC, vol, beta_u, su, beta_v, sv):
+            AU, BU, AV, BV, KC, vol, beta_u, su, beta_v, sv, parallel=False):
     """K_p and the face sums of the ``particle`` mode (module docstring); returns the number of
     particles whose drag arguments are out of range (their K_p is NaN, nothing deposited).
 
@@ -175,8 +181,32 @@ def deposit(code, position, velocity, radius, volume, u, v, voidage, rho, mu, dx
     BV[:, :] = 0.0
     KC[:, :] = 0.0
     three = velocity.shape[1] > 2
+    n = position.shape[0]
+    if parallel and n > CHUNK:
+        valid = np.empty(n, dtype=np.bool_)
+        bad = _kp_parallel(code, position, velocity, radius, volume, u, v, voidage, rho, mu, idx, idy, min_voidage,
+                           px, py, kp, valid)
+        for q_ in range(n):  # the face sums, in particle order as on one thread
+            q = U(q_)
+            if not valid[q]:
+                continue
+            x = position[q, U(0)]
+            y = position[q, U(1)]
+            ic = min(max(int(x / dx), 0), nx - 1)
+            jc = min(max(int(y / dy), 0), ny - 1)
+            ci0, ci1, cw0, cw1 = _centre_axis(x, idx, nx, px)
+            fi0, fi1, fw0, fw1 = _face_axis(x, idx, nx, px)
+            cj0, cj1, cv0, cv1 = _centre_axis(y, idy, ny, py)
+            fj0, fj1, fv0, fv1 = _face_axis(y, idy, ny, py)
+            k = kp[q]
+            KC[U(ic), U(jc)] += k
+            _scatter(AU, BU, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, k, velocity[q, U(0)])
+            _scatter(AV, BV, ci0, ci1, cw0, cw1, fj0, fj1, fv0, fv1, k, velocity[q, U(1)])
+        _face_coefficients(AU, BU, vol, beta_u, su)
+        _face_coefficients(AV, BV, vol, beta_v, sv)
+        return bad
     bad = 0
-    for q_ in range(position.shape[0]):
+    for q_ in range(n):
         q = U(q_)
         x = position[q, U(0)]
         y = position[q, U(1)]
@@ -210,6 +240,54 @@ def deposit(code, position, velocity, radius, volume, u, v, voidage, rho, mu, dx
         _scatter(AV, BV, ci0, ci1, cw0, cw1, fj0, fj1, fv0, fv1, k, vy)
     _face_coefficients(AU, BU, vol, beta_u, su)
     _face_coefficients(AV, BV, vol, beta_v, sv)
+    return bad
+
+
+@njit(cache=True, error_model="numpy")
+def _kp_range(lo, hi, code, position, velocity, radius, volume, u, v, voidage, rho, mu, idx, idy, min_voidage, px,
+              py, kp, valid):
+    """kp[q] of ``deposit`` for particles lo..hi−1 (the same expressions), valid[q] whether its drag arguments
+    are in range (else kp[q] = NaN); returns the number out of range."""
+    nx, ny = voidage.shape
+    three = velocity.shape[1] > 2
+    bad = 0
+    for q_ in range(lo, hi):
+        q = U(q_)
+        x = position[q, U(0)]
+        y = position[q, U(1)]
+        ci0, ci1, cw0, cw1 = _centre_axis(x, idx, nx, px)
+        fi0, fi1, fw0, fw1 = _face_axis(x, idx, nx, px)
+        cj0, cj1, cv0, cv1 = _centre_axis(y, idy, ny, py)
+        fj0, fj1, fv0, fv1 = _face_axis(y, idy, ny, py)
+        eps = _mean(voidage, ci0, ci1, cw0, cw1, cj0, cj1, cv0, cv1)
+        rg = _mean(rho, ci0, ci1, cw0, cw1, cj0, cj1, cv0, cv1)
+        if eps < min_voidage:
+            eps = min_voidage
+        elif eps > 1.0:
+            eps = 1.0
+        wx = _mean(u, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1) - velocity[q, U(0)]
+        wy = _mean(v, ci0, ci1, cw0, cw1, fj0, fj1, fv0, fv1) - velocity[q, U(1)]
+        wz = -velocity[q, U(2)] if three else 0.0
+        slip = math.sqrt(wx * wx + wy * wy + wz * wz)
+        d = 2.0 * radius[q]
+        ok = _drag_arguments_valid(eps, slip, d, rg, mu)
+        valid[q] = ok
+        if not ok:
+            bad += 1
+            kp[q] = math.nan
+            continue
+        kp[q] = beta_per_solids(code, eps, slip, d, rg, mu, 1.0) * volume[q]
+    return bad
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def _kp_parallel(code, position, velocity, radius, volume, u, v, voidage, rho, mu, idx, idy, min_voidage, px, py, kp,
+                 valid):
+    n = position.shape[0]
+    bad = 0
+    for c in prange((n + CHUNK - 1) // CHUNK):
+        bad += _kp_range(c * CHUNK, min(n, (c + 1) * CHUNK), code, position, velocity, radius, volume, u, v, voidage,
+                         rho, mu, idx, idy, min_voidage, px, py, kp, valid)
     return bad
 
 
@@ -273,17 +351,12 @@ def particle_forces(position, velocity, volume, kp, u, v, p, dx, dy, px, py, pre
 
 
 @njit(cache=True, error_model="numpy")
-def particle_forces_split(position, velocity, volume, kp, u, v, p, dx, dy, px, py, pressure_force, dim2, ext, damp,
-                          total):
-    """``particle_forces`` split for a drag that follows the particle's own velocity (``drag_update =
-    "substep"``): the fixed part ext[q] = K_q u_q − V_q ∇p_q and the coefficient damp[q] = K_q, so that
-    the engine evaluates ext − K v at every sub-step's velocity (Sun 2007 eq. 29 with u_q held from the
-    step). ``total`` (N, 3) follows the change of the force at the current velocity:
-    += (ext_new − K_new v) − (ext_old − K_old v). z of ext is 0 (the gas has no z velocity)."""
+def _split_range(lo, hi, position, velocity, volume, kp, u, v, p, idx, idy, px, py, pressure_force, dim2, ext, damp,
+                 total):
+    """``particle_forces_split`` for particles lo..hi−1."""
     nx, ny = p.shape
-    idx, idy = 1.0 / dx, 1.0 / dy
     three = velocity.shape[1] > 2
-    for q_ in range(position.shape[0]):
+    for q_ in range(lo, hi):
         q = U(q_)
         ug, vg, gx, gy = _gas_at(position[q, U(0)], position[q, U(1)], u, v, p, idx, idy, nx, ny, px, py, True,
                                  pressure_force)
@@ -305,6 +378,32 @@ def particle_forces_split(position, velocity, volume, kp, u, v, p, dx, dy, px, p
         ext[q, U(1)] = ay
         ext[q, U(2)] = 0.0
         damp[q] = k
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def _split_parallel(position, velocity, volume, kp, u, v, p, idx, idy, px, py, pressure_force, dim2, ext, damp, total):
+    n = position.shape[0]
+    for c in prange((n + CHUNK - 1) // CHUNK):
+        _split_range(c * CHUNK, min(n, (c + 1) * CHUNK), position, velocity, volume, kp, u, v, p, idx, idy, px, py,
+                     pressure_force, dim2, ext, damp, total)
+
+
+@njit(cache=True, error_model="numpy")
+def particle_forces_split(position, velocity, volume, kp, u, v, p, dx, dy, px, py, pressure_force, dim2, ext, damp,
+                          total, parallel=False):
+    """``particle_forces`` split for a drag that follows the particle's own velocity (``drag_update =
+    "substep"``): the fixed part ext[q] = K_q u_q − V_q ∇p_q and the coefficient damp[q] = K_q, so that
+    the engine evaluates ext − K v at every sub-step's velocity (Sun 2007 eq. 29 with u_q held from the
+    step). ``total`` (N, 3) follows the change of the force at the current velocity:
+    += (ext_new − K_new v) − (ext_old − K_old v). z of ext is 0 (the gas has no z velocity).
+    ``parallel``: chunks of particles on all threads (each particle's numbers as on one)."""
+    n = position.shape[0]
+    if parallel and n > CHUNK:
+        _split_parallel(position, velocity, volume, kp, u, v, p, 1.0 / dx, 1.0 / dy, px, py, pressure_force, dim2,
+                        ext, damp, total)
+    else:
+        _split_range(0, n, position, velocity, volume, kp, u, v, p, 1.0 / dx, 1.0 / dy, px, py, pressure_force, dim2,
+                     ext, damp, total)
 
 
 @njit(cache=True, inline="always")

@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 
 from ..gas.solver import GasState
@@ -230,7 +231,8 @@ class GasCoupling:
         bad = P.deposit(self.drag.code, st.position, st.velocity, st.radius, self.volume, gs.u, gs.v, voidage,
                         gs.rho, self.solver.props.viscosity, gd.dx, gd.dy, self.mapping.minimum_voidage,
                         *self._periodic, self._kp, au, bu_, av, bv_, self._kp_cells, gd.cell_volume,
-                        self._face_beta[0], self._face_solids[0], self._face_beta[1], self._face_solids[1])
+                        self._face_beta[0], self._face_solids[0], self._face_beta[1], self._face_solids[1],
+                        numba.get_num_threads() > 1)
         if bad:
             raise ValueError(f"particle drag: arguments out of range for {bad} particles "
                              "(voidage must lie in (0, 1], gas density > 0)")
@@ -248,7 +250,7 @@ class GasCoupling:
             self._check_gas()
             P.particle_forces_split(st.position, st.velocity, self.volume, self._kp, gs.u, gs.v, gs.p, gd.dx, gd.dy,
                                     *self._periodic, bool(self.options.pressure_gradient_force), bool(eng.dim2),
-                                    eng.ext_force, eng.ext_damping, st.force)
+                                    eng.ext_force, eng.ext_damping, st.force, numba.get_num_threads() > 1)
             return
         self._forces(eng.ext_force, eng.state.force)
 

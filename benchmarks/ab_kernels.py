@@ -43,6 +43,18 @@ def base_package(rev: str, where: Path) -> None:
             f.write_text(text.replace('resources.files("fluidem")', 'resources.files("fluidem_base")'))
 
 
+def _drop_unknown_state(restart: Path, mod) -> None:
+    """Remove the particle arrays an older package does not know (e.g. ``state/ids``) from a checkpoint
+    copy, so that it resumes a checkpoint written by a newer one."""
+    import h5py
+
+    known = set(importlib.import_module(f"{mod.__name__}.state").ParticleState.__dataclass_fields__)
+    with h5py.File(restart, "a") as f:
+        for k in list(f.get("state", {})):
+            if k not in known:
+                del f["state"][k]
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--base", required=True, help="the earlier commit (any git revision)")
@@ -69,6 +81,7 @@ def main() -> None:
             else:
                 copy = tmp / f"run_{name}"
                 shutil.copytree(args.run_dir, copy)
+                _drop_unknown_state(copy / "restart.h5", mod)
                 sim = mod.Simulation.resume(copy, threads=args.threads)
                 per = args.per or 50
                 k = per * sim.gas.substeps

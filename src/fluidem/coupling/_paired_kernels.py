@@ -31,10 +31,11 @@ Array indices in the per-particle loops are cast to unsigned (``U``): Numba adds
 for negative values to every access with a signed index (tsuji-jet bed at 1.5 s, one thread,
 bitwise the same results: ``deposit`` 245 → 209 µs, ``particle_forces_split`` 204 → 158 µs).
 
-With more than one thread (``parallel`` True) ``particle_forces_split`` splits the particles into
-chunks, and ``deposit`` computes every K_p so (the interpolation and the drag law, most of its work),
-then adds them into the face sums in one serial pass in particle order: each number is computed as
-on one thread, so the results are bitwise the same for any number of threads.
+``deposit`` computes every K_p first (the interpolation and the drag law, most of its work), then
+adds them into the face sums in one serial pass in particle order. With more than one thread
+(``parallel`` True) the first pass, and ``particle_forces_split``, run in chunks of particles on all
+threads: each number is computed as on one thread, so the results are bitwise the same for any
+number of threads.
 """
 import math
 
@@ -123,6 +124,17 @@ def _face_axis(x, inv_d, n, periodic):
 
 
 @njit(cache=True, inline="always")
+def _stencil(x, y, idx, idy, nx, ny, px, py):
+    """The nodes and weights around (x, y) on both axes: centres along x, faces along x, centres along
+    y, faces along y (``_centre_axis``, ``_face_axis``), 16 scalars."""
+    ci0, ci1, cw0, cw1 = _centre_axis(x, idx, nx, px)
+    fi0, fi1, fw0, fw1 = _face_axis(x, idx, nx, px)
+    cj0, cj1, cv0, cv1 = _centre_axis(y, idy, ny, py)
+    fj0, fj1, fv0, fv1 = _face_axis(y, idy, ny, py)
+    return ci0, ci1, cw0, cw1, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, fj0, fj1, fv0, fv1
+
+
+@njit(cache=True, inline="always")
 def _mean(f, i0, i1, a0, a1, j0, j1, b0, b1):
     """Σ a_i b_j f[i, j] over the two nodes of each axis."""
     return a0 * (b0 * f[U(i0), U(j0)] + b1 * f[U(i0), U(j1)]) + a1 * (b0 * f[U(i1), U(j0)] + b1 * f[U(i1), U(j1)])
@@ -180,64 +192,28 @@ def deposit(code, position, velocity, radius, volume, u, v, voidage, rho, mu, dx
     AV[:, :] = 0.0
     BV[:, :] = 0.0
     KC[:, :] = 0.0
-    three = velocity.shape[1] > 2
     n = position.shape[0]
+    valid = np.empty(n, dtype=np.bool_)
     if parallel and n > CHUNK:
-        valid = np.empty(n, dtype=np.bool_)
         bad = _kp_parallel(code, position, velocity, radius, volume, u, v, voidage, rho, mu, idx, idy, min_voidage,
                            px, py, kp, valid)
-        for q_ in range(n):  # the face sums, in particle order as on one thread
-            q = U(q_)
-            if not valid[q]:
-                continue
-            x = position[q, U(0)]
-            y = position[q, U(1)]
-            ic = min(max(int(x / dx), 0), nx - 1)
-            jc = min(max(int(y / dy), 0), ny - 1)
-            ci0, ci1, cw0, cw1 = _centre_axis(x, idx, nx, px)
-            fi0, fi1, fw0, fw1 = _face_axis(x, idx, nx, px)
-            cj0, cj1, cv0, cv1 = _centre_axis(y, idy, ny, py)
-            fj0, fj1, fv0, fv1 = _face_axis(y, idy, ny, py)
-            k = kp[q]
-            KC[U(ic), U(jc)] += k
-            _scatter(AU, BU, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, k, velocity[q, U(0)])
-            _scatter(AV, BV, ci0, ci1, cw0, cw1, fj0, fj1, fv0, fv1, k, velocity[q, U(1)])
-        _face_coefficients(AU, BU, vol, beta_u, su)
-        _face_coefficients(AV, BV, vol, beta_v, sv)
-        return bad
-    bad = 0
-    for q_ in range(n):
+    else:
+        bad = _kp_range(0, n, code, position, velocity, radius, volume, u, v, voidage, rho, mu, idx, idy, min_voidage,
+                        px, py, kp, valid)
+    for q_ in range(n):  # the face sums, in particle order
         q = U(q_)
+        if not valid[q]:
+            continue
         x = position[q, U(0)]
         y = position[q, U(1)]
         ic = min(max(int(x / dx), 0), nx - 1)
         jc = min(max(int(y / dy), 0), ny - 1)
-        ci0, ci1, cw0, cw1 = _centre_axis(x, idx, nx, px)
-        fi0, fi1, fw0, fw1 = _face_axis(x, idx, nx, px)
-        cj0, cj1, cv0, cv1 = _centre_axis(y, idy, ny, py)
-        fj0, fj1, fv0, fv1 = _face_axis(y, idy, ny, py)
-        eps = _mean(voidage, ci0, ci1, cw0, cw1, cj0, cj1, cv0, cv1)
-        rg = _mean(rho, ci0, ci1, cw0, cw1, cj0, cj1, cv0, cv1)
-        if eps < min_voidage:
-            eps = min_voidage
-        elif eps > 1.0:
-            eps = 1.0
-        vx = velocity[q, U(0)]
-        vy = velocity[q, U(1)]
-        wx = _mean(u, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1) - vx
-        wy = _mean(v, ci0, ci1, cw0, cw1, fj0, fj1, fv0, fv1) - vy
-        wz = -velocity[q, U(2)] if three else 0.0
-        slip = math.sqrt(wx * wx + wy * wy + wz * wz)
-        d = 2.0 * radius[q]
-        if not _drag_arguments_valid(eps, slip, d, rg, mu):
-            bad += 1
-            kp[q] = math.nan
-            continue
-        k = beta_per_solids(code, eps, slip, d, rg, mu, 1.0) * volume[q]  # β V_p/(1 − ε), Sun eq. 29
-        kp[q] = k
+        (ci0, ci1, cw0, cw1, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, fj0, fj1, fv0,
+         fv1) = _stencil(x, y, idx, idy, nx, ny, px, py)
+        k = kp[q]
         KC[U(ic), U(jc)] += k
-        _scatter(AU, BU, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, k, vx)
-        _scatter(AV, BV, ci0, ci1, cw0, cw1, fj0, fj1, fv0, fv1, k, vy)
+        _scatter(AU, BU, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, k, velocity[q, U(0)])
+        _scatter(AV, BV, ci0, ci1, cw0, cw1, fj0, fj1, fv0, fv1, k, velocity[q, U(1)])
     _face_coefficients(AU, BU, vol, beta_u, su)
     _face_coefficients(AV, BV, vol, beta_v, sv)
     return bad
@@ -246,8 +222,8 @@ def deposit(code, position, velocity, radius, volume, u, v, voidage, rho, mu, dx
 @njit(cache=True, error_model="numpy")
 def _kp_range(lo, hi, code, position, velocity, radius, volume, u, v, voidage, rho, mu, idx, idy, min_voidage, px,
               py, kp, valid):
-    """kp[q] of ``deposit`` for particles lo..hi−1 (the same expressions), valid[q] whether its drag arguments
-    are in range (else kp[q] = NaN); returns the number out of range."""
+    """kp[q] of ``deposit`` for particles lo..hi−1, valid[q] whether its drag arguments are in range (else
+    kp[q] = NaN); returns the number out of range."""
     nx, ny = voidage.shape
     three = velocity.shape[1] > 2
     bad = 0
@@ -255,10 +231,8 @@ def _kp_range(lo, hi, code, position, velocity, radius, volume, u, v, voidage, r
         q = U(q_)
         x = position[q, U(0)]
         y = position[q, U(1)]
-        ci0, ci1, cw0, cw1 = _centre_axis(x, idx, nx, px)
-        fi0, fi1, fw0, fw1 = _face_axis(x, idx, nx, px)
-        cj0, cj1, cv0, cv1 = _centre_axis(y, idy, ny, py)
-        fj0, fj1, fv0, fv1 = _face_axis(y, idy, ny, py)
+        (ci0, ci1, cw0, cw1, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, fj0, fj1, fv0,
+         fv1) = _stencil(x, y, idx, idy, nx, ny, px, py)
         eps = _mean(voidage, ci0, ci1, cw0, cw1, cj0, cj1, cv0, cv1)
         rg = _mean(rho, ci0, ci1, cw0, cw1, cj0, cj1, cv0, cv1)
         if eps < min_voidage:
@@ -305,10 +279,8 @@ def _face_coefficients(A, B, vol, beta, solids):
 def _gas_at(x, y, u, v, p, idx, idy, nx, ny, px, py, velocity, pressure):
     """Gas velocity (u, v) and ∇p at (x, y), interpolated with the weights of ``deposit`` (the velocity
     from its faces, ∇p by ``_gradient_at``); 0.0 for what is not asked (``velocity``, ``pressure``)."""
-    ci0, ci1, cw0, cw1 = _centre_axis(x, idx, nx, px)
-    fi0, fi1, fw0, fw1 = _face_axis(x, idx, nx, px)
-    cj0, cj1, cv0, cv1 = _centre_axis(y, idy, ny, py)
-    fj0, fj1, fv0, fv1 = _face_axis(y, idy, ny, py)
+    (ci0, ci1, cw0, cw1, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, fj0, fj1, fv0,
+     fv1) = _stencil(x, y, idx, idy, nx, ny, px, py)
     ug = 0.0
     vg = 0.0
     gx = 0.0

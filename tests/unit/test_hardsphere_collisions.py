@@ -386,3 +386,24 @@ def test_initial_overlap_is_reported(make_case):
     with pytest.raises(CaseError, match="overlap"):
         make(make_case, [[0.05, 0.05, 0.002], [0.053, 0.05, 0.002]], DIAMETER, np.zeros((2, 3)), np.zeros((2, 3)),
              dimensions=2, contact=hard())
+
+
+@pytest.mark.parametrize("dim2", [True, False])
+def test_upper_half_lists_each_pair_once_in_row_order(dim2):
+    """``upper_half`` (what the all-particle prediction walks): row i holds exactly the neighbours j > i of
+    the full list's row i, in that row's order (the order in which the prediction offers equal times)."""
+    from fluidem.particles import _hardsphere_kernels as K
+
+    rng = np.random.default_rng(3)
+    n = 700
+    pos = rng.uniform(0.0, 0.05 if dim2 else 0.02, (n, 3))  # a few neighbours each (overlaps do not matter)
+    if dim2:
+        pos[:, 2] = 0.002
+    radius = rng.uniform(0.5e-3, 1.5e-3, n)
+    start, nbr = K.build_neighbours(pos, radius, 1e-3, dim2)
+    up_start, up = K.upper_half(start, nbr)
+    assert up_start.dtype == np.uint64 and up.dtype == np.uint32
+    assert up.size == nbr.size // 2 > n  # the full list is symmetric: each pair twice there, once here
+    for i in range(n):
+        row = nbr[start[i]:start[i + 1]]
+        assert np.array_equal(up[up_start[i]:up_start[i + 1]], row[row > i])

@@ -184,3 +184,21 @@ def test_coupling_follows_the_renumbering():
     assert speed > 0.01  # the particles fall and the gas acts [m/s]
     assert np.abs(by_id(st, "position") - plain.state.position).max() < 1e-9
     assert np.abs(by_id(st, "velocity") - plain.state.velocity).max() < 1e-6 * speed
+
+
+def test_checkpoint_of_a_renumbered_coupled_bed_loads_into_a_fresh_simulation(tmp_path):
+    """A fresh Simulation (particles numbered as placed) loading the checkpoint of a renumbered polydisperse
+    bed takes the checkpoint's numbering everywhere, the coupling's particle volumes included, and goes
+    on exactly as the run that wrote it."""
+    case = coupled_polydisperse_bed(30)
+    first = Simulation(case)
+    first.run(until=0.01)
+    assert first.engine.reorders > 0 and not np.array_equal(first.state.ids, np.arange(first.state.n))
+    first.save_checkpoint(tmp_path / "restart.h5")
+    fresh = Simulation(case)
+    fresh.load_checkpoint(tmp_path / "restart.h5")
+    np.testing.assert_array_equal(fresh.state.ids, first.state.ids)
+    np.testing.assert_array_equal(fresh.gas.volume, math.pi / 6.0 * (2.0 * fresh.state.radius) ** 3)
+    first.run(until=0.012)
+    fresh.run(until=0.012)
+    assert np.abs(fresh.state.position - first.state.position).max() < 1e-12

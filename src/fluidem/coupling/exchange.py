@@ -343,6 +343,8 @@ class GasCoupling:
     def restore(self, arrays: dict[str, np.ndarray], scalars: dict) -> None:
         self.state = GasState(**{k: np.ascontiguousarray(arrays[f"gas/{k}"], dtype=float) for k in GAS_KEYS})
         self.gas_steps = int(scalars["gas_steps"])
+        # the restored particles may be numbered otherwise than at construction (renumbered in cell order)
+        self.volume = math.pi / 6.0 * (2.0 * self._particles().radius) ** 3
         self._paired_ready = False
         if self.exchange == "particle" and "coupling/kp" in arrays:
             self._kp = np.ascontiguousarray(arrays["coupling/kp"], dtype=float)

@@ -238,6 +238,9 @@ class SoftSphereEngine:
 
     def restore(self, arrays: dict[str, np.ndarray], scalars: dict) -> None:
         restore_state(self.state, arrays)
+        # derived per particle: the restored particles may be numbered otherwise than at construction
+        self.inv_mass = 1.0 / self.state.mass
+        self.inv_inertia = 1.0 / self.state.inertia
         self.last_reorder = int(scalars.get("last_reorder", 0))
         self.reorders = int(scalars.get("reorders", 0))
         for k in ("wall_hist", "ref_pos", "ext_force"):

@@ -83,7 +83,7 @@ class GasCoupling:
         engine.dt = self.gas_dt / self.substeps
         engine.time = engine.steps * engine.dt
         st = engine.state
-        self.volume = math.pi / 6.0 * (2.0 * st.radius) ** 3
+        self._set_volumes()
         self.exchange = self.options.momentum_exchange
         # "substep" drag of the "particle" exchange: the engine evaluates K_p (u_p − v) − V_p ∇p at every
         # sub-step's own velocity (ext_force = K_p u_p − V_p ∇p, ext_damping = K_p), in its one compiled call
@@ -114,9 +114,13 @@ class GasCoupling:
         self.clipped = smap.clipped
 
     # ------------------------------------------------------------ pieces
+    def _set_volumes(self) -> None:
+        """V_p = π/6 d³ of the engine's particles, in their current numbering [m³]."""
+        self.volume = math.pi / 6.0 * (2.0 * self.engine.state.radius) ** 3
+
     def _reorder(self, order) -> None:
         """The engine renumbered its particles (new k is former order[k]): so do the per-particle arrays here."""
-        self.volume = self.volume[order]
+        self._set_volumes()
         if self._kp.shape == order.shape:
             self._kp = self._kp[order]
 
@@ -177,7 +181,7 @@ class GasCoupling:
         st = self.engine.state
         n = st.position.shape[0]
         if self.volume.shape != (n,):  # particles added or removed since construction
-            self.volume = math.pi / 6.0 * (2.0 * st.radius) ** 3
+            self._set_volumes()
         if st.position.shape != (n, 3) or st.velocity.shape != (n, 3) or st.radius.shape != (n,):
             raise ValueError(f"particle state: position, velocity (N, 3) and radius (N,) expected; got "
                              f"{st.position.shape}, {st.velocity.shape}, {st.radius.shape}")
@@ -343,8 +347,7 @@ class GasCoupling:
     def restore(self, arrays: dict[str, np.ndarray], scalars: dict) -> None:
         self.state = GasState(**{k: np.ascontiguousarray(arrays[f"gas/{k}"], dtype=float) for k in GAS_KEYS})
         self.gas_steps = int(scalars["gas_steps"])
-        # the restored particles may be numbered otherwise than at construction (renumbered in cell order)
-        self.volume = math.pi / 6.0 * (2.0 * self._particles().radius) ** 3
+        self._set_volumes()  # the restored particles may be numbered otherwise than at construction
         self._paired_ready = False
         if self.exchange == "particle" and "coupling/kp" in arrays:
             self._kp = np.ascontiguousarray(arrays["coupling/kp"], dtype=float)

@@ -261,7 +261,7 @@ class HardSphereEngine:
                 "skin": self.skin}
 
     def restore(self, arrays: dict[str, np.ndarray], scalars: dict) -> None:
-        restore_state(self.state, arrays)
+        restore_state(self, arrays)
         for k in ("ref_pos", "last_collision", "ext_force", "counters", "energy"):
             getattr(self, k)[...] = arrays[f"engine/{k}"]
         self.nbr_start = np.ascontiguousarray(arrays["engine/nbr_start"], dtype=np.int64)
@@ -273,6 +273,4 @@ class HardSphereEngine:
         self.skin = float(scalars.get("skin", self.skin))
         self.steps = int(scalars["steps"])
         self.time = self.steps * self.dt
-        self.inv_mass = 1.0 / self.state.mass
-        self.inv_inertia = 1.0 / self.state.inertia
         self._update_force()

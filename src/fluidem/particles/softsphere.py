@@ -36,16 +36,23 @@ def set_up_particles(engine, case, state: ParticleState | None) -> ParticleState
         dens = np.array([s.density for s in case.particles.species])
         state = ParticleState.create(pos, vel, diam, spec, dens)
     engine.state = state
-    engine.inv_mass = 1.0 / state.mass
-    engine.inv_inertia = 1.0 / state.inertia
+    _derive_inverses(engine)
     engine.gravity = np.array(case.gravity, float)
     engine.ext_force = np.zeros_like(state.position)
     return state
 
 
-def restore_state(state: ParticleState, arrays: dict[str, np.ndarray]) -> None:
-    """Copy a checkpoint's ``state/…`` arrays into ``state`` (checkpoints from before ``ids`` existed:
-    particles numbered as created)."""
+def _derive_inverses(engine) -> None:
+    """The engine's 1/m and 1/I per particle, from its state."""
+    engine.inv_mass = 1.0 / engine.state.mass
+    engine.inv_inertia = 1.0 / engine.state.inertia
+
+
+def restore_state(engine, arrays: dict[str, np.ndarray]) -> None:
+    """Copy a checkpoint's ``state/…`` arrays into ``engine.state`` (checkpoints from before ``ids`` existed:
+    particles numbered as created) and derive 1/m and 1/I anew: the restored particles may be numbered
+    otherwise than at construction (renumbered in cell order)."""
+    state = engine.state
     for k, a in state.arrays().items():
         key = f"state/{k}"
         if key in arrays:
@@ -54,6 +61,7 @@ def restore_state(state: ParticleState, arrays: dict[str, np.ndarray]) -> None:
             a[...] = np.arange(a.shape[0])
         else:
             raise KeyError(key)
+    _derive_inverses(engine)
 
 
 class SoftSphereEngine:
@@ -237,10 +245,7 @@ class SoftSphereEngine:
                 "reorders": self.reorders}
 
     def restore(self, arrays: dict[str, np.ndarray], scalars: dict) -> None:
-        restore_state(self.state, arrays)
-        # derived per particle: the restored particles may be numbered otherwise than at construction
-        self.inv_mass = 1.0 / self.state.mass
-        self.inv_inertia = 1.0 / self.state.inertia
+        restore_state(self, arrays)
         self.last_reorder = int(scalars.get("last_reorder", 0))
         self.reorders = int(scalars.get("reorders", 0))
         for k in ("wall_hist", "ref_pos", "ext_force"):

@@ -272,12 +272,11 @@ def wall_contact(i, w, pos, vel, omega, radius, mass, species, pw, wall_now, wal
 
 @njit(cache=True, error_model="numpy")
 def _gather_range(lo, hi, pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_axis, wall_hist, wall_touch,
-                  gravity, ext_force, ext_damping, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos,
-                  limit2):
+                  near_count, near_wall, gravity, ext_force, ext_damping, dim2, sum_f, sum_c, dt, force, torque, inv_mass,
+                  inv_inertia, mode, ref_pos, limit2):
     """gather_forces for particles lo..hi−1 (serial code; the parallel driver splits the range)."""
     half = 0.5 * dt
     moved = 0
-    nw = wall_normal.shape[0]
     update = mode > 0
     for i_ in range(lo, hi):
         i = U(i_)
@@ -309,8 +308,8 @@ def _gather_range(lo, hi, pos, vel, omega, radius, mass, species, pw, wall_now, 
         xi = pos[i, U(0)]
         yi = pos[i, U(1)]
         zi = pos[i, U(2)]
-        for w_ in range(nw):
-            w = U(w_)
+        for q in range(near_count[i]):  # the walls particle i can reach before the next list rebuild (near_walls)
+            w = U(near_wall[i, U(q)])
             nx = wall_normal[w, U(0)]
             ny = wall_normal[w, U(1)]
             nz = wall_normal[w, U(2)]
@@ -414,27 +413,78 @@ def touching_walls(wall_hist):
     return out
 
 
+@njit(cache=True, error_model="numpy")
+def near_walls(ref_pos, radius, wall_motion, wall_point0, wall_normal, skin, dim2, wall_hist, wall_touch):
+    """(near_count (N,), near_wall (N, W)): the walls each particle can touch before the next list rebuild.
+
+    Between rebuilds no particle is more than skin/2 from its place at the last one (``ref_pos``), so a
+    static wall whose gap n·(x_ref − p) exceeds a + skin cannot be reached (in 2D, where centres move in
+    the x-y plane only, a + skin |n_xy|: the front and back walls of a one-layer bed at exactly one
+    radius are never touched); a moving wall always can.
+    Most particles of a bed touch no wall: checking only these (ascending w, as before) spared the
+    gather pass five of its six box sides per particle (10,000-sphere bench bed: 0.47 → 0.17 ms of
+    wall checks per step measured with none at all). A particle whose wall spring is still set on a wall
+    out of reach left that contact earlier: its spring is reset here (the per-step check did it then).
+    """
+    n, nw = ref_pos.shape[0], wall_normal.shape[0]
+    near_count = np.zeros(n, dtype=np.int64)
+    near_wall = np.empty((n, nw), dtype=np.int64)
+    for i in range(n):
+        c = 0
+        for w in range(nw):
+            reach = True
+            if int(wall_motion[w, 0]) == STATIC:
+                gap = ((ref_pos[i, 0] - wall_point0[w, 0]) * wall_normal[w, 0]
+                       + (ref_pos[i, 1] - wall_point0[w, 1]) * wall_normal[w, 1]
+                       + (ref_pos[i, 2] - wall_point0[w, 2]) * wall_normal[w, 2])
+                reach_by = skin
+                if dim2:
+                    reach_by = skin * math.sqrt(wall_normal[w, 0] ** 2 + wall_normal[w, 1] ** 2)
+                reach = gap < radius[i] + reach_by
+            if reach:
+                near_wall[i, c] = w
+                c += 1
+            elif wall_touch[i, w]:
+                wall_hist[i, w, 0] = 0.0
+                wall_hist[i, w, 1] = 0.0
+                wall_hist[i, w, 2] = 0.0
+                wall_touch[i, w] = False
+        near_count[i] = c
+    return near_count, near_wall
+
+
+@njit(cache=True, error_model="numpy")
+def all_walls(n, nw):
+    """near_walls' arrays listing every wall for every particle (forces evaluated outside ``advance``)."""
+    near_wall = np.empty((n, nw), dtype=np.int64)
+    for i in range(n):
+        for w in range(nw):
+            near_wall[i, w] = w
+    return np.full(n, nw, dtype=np.int64), near_wall
+
+
 GATHER_CHUNK = 128  # particles per parallel work item of gather_forces (small: even shares for 2 threads, 10 and 9 items of 2400 particles against 3 and 2 of 512)
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
 def _gather_parallel(pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_axis, wall_hist, wall_touch,
-                     gravity, ext_force, ext_damping, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos,
-                     limit2):
+                     near_count, near_wall, gravity, ext_force, ext_damping, dim2, sum_f, sum_c, dt, force, torque, inv_mass,
+                     inv_inertia, mode, ref_pos, limit2):
     n = pos.shape[0]
     nchunk = (n + GATHER_CHUNK - 1) // GATHER_CHUNK
     moved = 0
     for c in prange(nchunk):
         moved += _gather_range(c * GATHER_CHUNK, min(n, (c + 1) * GATHER_CHUNK), pos, vel, omega, radius, mass,
-                               species, pw, wall_now, wall_normal, wall_axis, wall_hist, wall_touch, gravity, ext_force, ext_damping, dim2, sum_f,
-                               sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2)
+                               species, pw, wall_now, wall_normal, wall_axis, wall_hist, wall_touch, near_count, near_wall,
+                               gravity, ext_force, ext_damping, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia,
+                               mode, ref_pos, limit2)
     return moved
 
 
 @njit(cache=True, error_model="numpy")
 def gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal, wall_axis,
-                  wall_hist, wall_touch, gravity, ext_force, ext_damping, dim2, sum_f, sum_c, t, dt, force, torque, inv_mass, inv_inertia,
-                  mode, ref_pos, limit2, parallel):
+                  wall_hist, wall_touch, near_count, near_wall, gravity, ext_force, ext_damping, dim2, sum_f, sum_c, t, dt,
+                  force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2, parallel):
     """Total force and torque per particle: contact sums, walls, gravity, external force.
 
     ``mode`` fuses the integrator into the same pass (one memory sweep per step):
@@ -443,17 +493,18 @@ def gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_
     than sqrt(limit2) from ``ref_pos`` (mode 2), else 0. Leaves sum_f and sum_c zero.
     ``wall_touch`` (N, W) bool: False where wall_hist[i, w] is zero (see touching_walls); kept so.
     ``wall_axis``: ``wall_axes(wall_normal)``, made once by the caller (the walls' normals do not change).
+    ``near_count``, ``near_wall``: the walls each particle is checked against (``near_walls``; all walls: ``all_walls``).
     Each particle's arithmetic is the same on any number of threads (``parallel`` False: no parallel region).
     """
     wall_now = walls_now(wall_motion, wall_point0, t)
     n = pos.shape[0]
     if parallel and n > GATHER_CHUNK:
         return _gather_parallel(pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_axis, wall_hist,
-                                wall_touch, gravity, ext_force, ext_damping, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia,
-                                mode, ref_pos, limit2)
+                                wall_touch, near_count, near_wall, gravity, ext_force, ext_damping, dim2, sum_f, sum_c, dt,
+                                force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2)
     return _gather_range(0, n, pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_axis, wall_hist,
-                         wall_touch, gravity, ext_force, ext_damping, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode,
-                         ref_pos, limit2)
+                         wall_touch, near_count, near_wall, gravity, ext_force, ext_damping, dim2, sum_f, sum_c, dt, force,
+                         torque, inv_mass, inv_inertia, mode, ref_pos, limit2)
 
 
 @njit(cache=True, error_model="numpy")
@@ -532,8 +583,10 @@ def compute_forces(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, 
     sum_c = np.zeros_like(force)
     pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
                 dt, update, sum_f, sum_c, parallel)
+    near_count, near_wall = all_walls(pos.shape[0], wall_normal.shape[0])
     gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
-                  wall_axes(wall_normal), wall_hist, touching_walls(wall_hist), gravity, ext_force, ext_damping, dim2, sum_f, sum_c, t, dt, force, torque, mass, mass, 0, pos, 0.0, parallel)
+                  wall_axes(wall_normal), wall_hist, touching_walls(wall_hist), near_count, near_wall, gravity, ext_force,
+                  ext_damping, dim2, sum_f, sum_c, t, dt, force, torque, mass, mass, 0, pos, 0.0, parallel)
 
 
 @njit(cache=True, error_model="numpy")
@@ -573,6 +626,8 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
         return row_start, partner, hist, slab_start, slab_members, rebuilds, last_reorder, 0, combined
     wall_touch = touching_walls(wall_hist)
     wall_axis = wall_axes(wall_normal)
+    near_count, near_wall = near_walls(ref_pos, radius, wall_motion, wall_point0, wall_normal, skin, dim2, wall_hist,
+                                         wall_touch)
     moved = _kick_drift(pos, vel, omega, force, torque, inv_mass, inv_inertia, dt, ref_pos, limit2)
     for s in range(nsteps):
         t = (step0 + s + 1) * dt
@@ -587,11 +642,13 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
                 reorders += 1
             row_start, partner, hist, slab_start, slab_members = rebuild(
                 pos, radius, skin, dim2, row_start, partner, hist, ref_pos)
+            near_count, near_wall = near_walls(ref_pos, radius, wall_motion, wall_point0, wall_normal, skin, dim2,
+                                               wall_hist, wall_touch)
             rebuilds += 1
         pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
                     dt, True, sum_f, sum_c, parallel)
         mode = 2 if s < nsteps - 1 else 1
         moved = gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
-                              wall_axis, wall_hist, wall_touch, gravity, ext_force, ext_damping, dim2, sum_f, sum_c, t, dt, force, torque, inv_mass,
-                              inv_inertia, mode, ref_pos, limit2, parallel)
+                              wall_axis, wall_hist, wall_touch, near_count, near_wall, gravity, ext_force, ext_damping, dim2,
+                              sum_f, sum_c, t, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2, parallel)
     return row_start, partner, hist, slab_start, slab_members, rebuilds, last_reorder, reorders, combined

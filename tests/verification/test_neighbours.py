@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fluidem.particles._neighbours_kernels import brute_force_pairs, build_pairs, carry_history
+from fluidem.particles._neighbours_kernels import brute_force_pairs, build_pairs, carry_history, contacts_first
 
 
 def csr_pairs(row_start, partner):
@@ -56,7 +56,7 @@ def check_lists(pos, radius, skin, dim2):
                               f"of {len(expected)} pairs")
     owner = np.repeat(np.arange(n), np.diff(row_start))
     assert np.all(partner != owner)
-    # rows sorted (history carry-over searches them)
+    # rows sorted (the engine then puts the touching pairs first: contacts_first)
     for i in range(n):
         assert np.all(np.diff(partner[row_start[i]:row_start[i + 1]]) > 0)
     # slabs: every particle in exactly one; a pair joins its owner's slab to the same or the next slab
@@ -100,17 +100,44 @@ def test_cell_list_degenerate_layouts():
 
 
 @pytest.mark.parametrize("dim2", [False, True], ids=["3d", "2d"])
-def test_history_follows_its_pair_across_a_rebuild(all_threads, dim2):
+def test_contacts_first_keeps_every_pair_with_its_history(dim2):
+    """Each row after contacts_first: the same partners with the same springs, the touching pairs first,
+    each part in its former (ascending) order; rows with no contact or no far pair unchanged."""
+    rng = np.random.default_rng(5)
+    pos, radius = random_packing(3, 600, dim2, solid_fraction=0.5)
+    rs, partner, _, _ = build_pairs(pos, radius, 0.5e-3, dim2)
+    hist = rng.normal(0.0, 1e-6, (partner.shape[0], 3))
+    p0, h0 = partner.copy(), hist.copy()
+    contacts_first(pos, radius, rs, partner, hist)
+    mixed = 0
+    for i in range(pos.shape[0]):
+        a, b = rs[i], rs[i + 1]
+        d = pos[i] - pos[p0[a:b]]
+        touch = np.einsum("ij,ij->i", d, d) < (radius[i] + radius[p0[a:b]]) ** 2
+        want = np.concatenate([np.flatnonzero(touch), np.flatnonzero(~touch)])
+        np.testing.assert_array_equal(partner[a:b], p0[a:b][want])
+        np.testing.assert_array_equal(hist[a:b], h0[a:b][want])
+        mixed += bool(touch.any() and not touch.all() and not touch[:touch.sum()].all())
+    assert mixed > 50, "too few rows with their contacts out of front to test the reordering"
+
+
+@pytest.mark.parametrize("dim2", [False, True], ids=["3d", "2d"])
+@pytest.mark.parametrize("contact_order", [False, True], ids=["sorted", "contacts-first"])
+def test_history_follows_its_pair_across_a_rebuild(all_threads, dim2, contact_order):
     """carry_history against a dictionary: a persisting pair keeps its tangential spring exactly; a pair
     whose owner changed gets it negated (it is kept relative to the owner: n and v_i − v_j flip); a new
     pair starts at zero. Particles move a little and the outermost one far, so slab boundaries shift and
-    many pairs change owner."""
+    many pairs change owner. The old list as build_pairs leaves it (rows sorted) and as the engine keeps
+    it (touching pairs first, contacts_first)."""
     rng = np.random.default_rng(21)
     skin = 0.3e-3
     pos, radius = random_packing(8, 500, dim2)
     rs0, partner0, _, _ = build_pairs(pos, radius, skin, dim2)
     owner0 = np.repeat(np.arange(pos.shape[0]), np.diff(rs0))
     hist0 = rng.normal(0.0, 1e-6, (partner0.shape[0], 3))
+    if contact_order:
+        contacts_first(pos, radius, rs0, partner0, hist0)
+        owner0 = np.repeat(np.arange(pos.shape[0]), np.diff(rs0))
     old = {(int(i), int(j)): hist0[p] for p, (i, j) in enumerate(zip(owner0, partner0))}
 
     kept = flipped = new = 0

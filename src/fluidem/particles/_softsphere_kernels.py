@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from ._neighbours_kernels import build_pairs, carry_history, cell_order, renumber_pairs
+from ._neighbours_kernels import build_pairs, carry_history, cell_order, contacts_first, renumber_pairs
 from .contact._dispatch import contact_force
 from .contact.base import N_SLOTS
 
@@ -528,9 +528,11 @@ def _kick_drift(pos, vel, omega, force, torque, inv_mass, inv_inertia, dt, ref_p
 
 @njit(cache=True, error_model="numpy")
 def rebuild(pos, radius, skin, dim2, row_start, partner, hist, ref_pos):
-    """New Verlet list around the current positions, history carried over."""
+    """New Verlet list around the current positions, history carried over, touching pairs first in each row
+    (``contacts_first``)."""
     new_start, new_partner, slab_start, slab_members = build_pairs(pos, radius, skin, dim2, partner.shape[0])
     new_hist = carry_history(row_start, partner, hist, new_start, new_partner)
+    contacts_first(pos, radius, new_start, new_partner, new_hist)
     ref_pos[:, :] = pos
     return new_start, new_partner, new_hist, slab_start, slab_members
 

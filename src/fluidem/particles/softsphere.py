@@ -14,7 +14,7 @@ import numpy as np
 from ..errors import CaseError
 from ..state import ParticleState
 from . import _softsphere_kernels as K
-from ._neighbours_kernels import build_pairs
+from ._neighbours_kernels import build_pairs, contacts_first
 from .contact.base import N_SLOTS
 from .placement import place
 from .walls import build_walls
@@ -88,6 +88,7 @@ class SoftSphereEngine:
         self.row_start, self.partner, self.slab_start, self.slab_members = build_pairs(
             st.position, st.radius, self.skin, self.dim2)
         self.hist = np.zeros((self.partner.shape[0], 3))
+        contacts_first(st.position, st.radius, self.row_start, self.partner, self.hist)  # as every rebuild leaves it
         self.reorder_interval = self._reorder_interval()
         self.last_reorder = 0  # step of the last renumbering in cell order (see advance)
         self.reorders = 0

@@ -272,8 +272,8 @@ def wall_contact(i, w, pos, vel, omega, radius, mass, species, pw, wall_now, wal
 
 @njit(cache=True, error_model="numpy")
 def _gather_range(lo, hi, pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_axis, wall_hist, wall_touch,
-                  near_count, near_wall, gravity, ext_force, ext_damping, dim2, sum_f, sum_c, dt, force, torque, inv_mass,
-                  inv_inertia, mode, ref_pos, limit2):
+                  near_count, near_wall, gravity, ext_force, ext_damping, has_ext, dim2, sum_f, sum_c, dt, force, torque,
+                  inv_mass, inv_inertia, mode, ref_pos, limit2):
     """gather_forces for particles lo..hi−1 (serial code; the parallel driver splits the range)."""
     half = 0.5 * dt
     moved = 0
@@ -282,10 +282,14 @@ def _gather_range(lo, hi, pos, vel, omega, radius, mass, species, pw, wall_now, 
         i = U(i_)
         # external force: a fixed part and a linear drag −c v at the current velocity (the gas's drag
         # coefficient K_p when the coupling updates the particle's own velocity every sub-step)
-        c = ext_damping[i]
-        fx = mass[i] * gravity[0] + (ext_force[i, U(0)] - c * vel[i, U(0)])
-        fy = mass[i] * gravity[1] + (ext_force[i, U(1)] - c * vel[i, U(1)])
-        fz = mass[i] * gravity[2] + (ext_force[i, U(2)] - c * vel[i, U(2)])
+        fx = mass[i] * gravity[0]
+        fy = mass[i] * gravity[1]
+        fz = mass[i] * gravity[2]
+        if has_ext:  # else both are zero (no gas): not read, 4 of the pass's ~40 numbers a particle
+            c = ext_damping[i]
+            fx += ext_force[i, U(0)] - c * vel[i, U(0)]
+            fy += ext_force[i, U(1)] - c * vel[i, U(1)]
+            fz += ext_force[i, U(2)] - c * vel[i, U(2)]
         fx += sum_f[i, U(0)]
         fy += sum_f[i, U(1)]
         fz += sum_f[i, U(2)]
@@ -352,12 +356,13 @@ def _gather_range(lo, hi, pos, vel, omega, radius, mass, species, pw, wall_now, 
             fz = 0.0
             tx = 0.0
             ty = 0.0
-        force[i, U(0)] = fx
-        force[i, U(1)] = fy
-        force[i, U(2)] = fz
-        torque[i, U(0)] = tx
-        torque[i, U(1)] = ty
-        torque[i, U(2)] = tz
+        if mode < 2:  # mode 2: the next step's pass writes them before anything reads them
+            force[i, U(0)] = fx
+            force[i, U(1)] = fy
+            force[i, U(2)] = fz
+            torque[i, U(0)] = tx
+            torque[i, U(1)] = ty
+            torque[i, U(2)] = tz
         if mode >= 1:
             # in registers (re-reading force and vel from memory after each store chained the updates through
             # store-to-load forwarding: 23 % slower); the two half kicks stay two additions, bitwise as separate passes
@@ -468,28 +473,29 @@ GATHER_CHUNK = 128  # particles per parallel work item of gather_forces (small: 
 
 @njit(cache=True, error_model="numpy", parallel=True)
 def _gather_parallel(pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_axis, wall_hist, wall_touch,
-                     near_count, near_wall, gravity, ext_force, ext_damping, dim2, sum_f, sum_c, dt, force, torque, inv_mass,
-                     inv_inertia, mode, ref_pos, limit2):
+                     near_count, near_wall, gravity, ext_force, ext_damping, has_ext, dim2, sum_f, sum_c, dt, force, torque,
+                     inv_mass, inv_inertia, mode, ref_pos, limit2):
     n = pos.shape[0]
     nchunk = (n + GATHER_CHUNK - 1) // GATHER_CHUNK
     moved = 0
     for c in prange(nchunk):
         moved += _gather_range(c * GATHER_CHUNK, min(n, (c + 1) * GATHER_CHUNK), pos, vel, omega, radius, mass,
                                species, pw, wall_now, wall_normal, wall_axis, wall_hist, wall_touch, near_count, near_wall,
-                               gravity, ext_force, ext_damping, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia,
-                               mode, ref_pos, limit2)
+                               gravity, ext_force, ext_damping, has_ext, dim2, sum_f, sum_c, dt, force, torque, inv_mass,
+                               inv_inertia, mode, ref_pos, limit2)
     return moved
 
 
 @njit(cache=True, error_model="numpy")
 def gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal, wall_axis,
-                  wall_hist, wall_touch, near_count, near_wall, gravity, ext_force, ext_damping, dim2, sum_f, sum_c, t, dt,
-                  force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2, parallel):
+                  wall_hist, wall_touch, near_count, near_wall, gravity, ext_force, ext_damping, has_ext, dim2, sum_f, sum_c,
+                  t, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2, parallel):
     """Total force and torque per particle: contact sums, walls, gravity, external force.
 
     ``mode`` fuses the integrator into the same pass (one memory sweep per step):
     0 forces only (wall history untouched); 1 forces + closing half kick; 2 forces + closing half kick +
-    the next step's half kick and drift. Returns how many particles moved more
+    the next step's half kick and drift (``force`` and ``torque`` are then not stored: the next step's
+    pass overwrites them unread). ``has_ext`` False: ext_force and ext_damping are zero (not read). Returns how many particles moved more
     than sqrt(limit2) from ``ref_pos`` (mode 2), else 0. Leaves sum_f and sum_c zero.
     ``wall_touch`` (N, W) bool: False where wall_hist[i, w] is zero (see touching_walls); kept so.
     ``wall_axis``: ``wall_axes(wall_normal)``, made once by the caller (the walls' normals do not change).
@@ -500,11 +506,11 @@ def gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_
     n = pos.shape[0]
     if parallel and n > GATHER_CHUNK:
         return _gather_parallel(pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_axis, wall_hist,
-                                wall_touch, near_count, near_wall, gravity, ext_force, ext_damping, dim2, sum_f, sum_c, dt,
-                                force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2)
+                                wall_touch, near_count, near_wall, gravity, ext_force, ext_damping, has_ext, dim2, sum_f,
+                                sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2)
     return _gather_range(0, n, pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_axis, wall_hist,
-                         wall_touch, near_count, near_wall, gravity, ext_force, ext_damping, dim2, sum_f, sum_c, dt, force,
-                         torque, inv_mass, inv_inertia, mode, ref_pos, limit2)
+                         wall_touch, near_count, near_wall, gravity, ext_force, ext_damping, has_ext, dim2, sum_f, sum_c,
+                         dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2)
 
 
 @njit(cache=True, error_model="numpy")
@@ -588,7 +594,7 @@ def compute_forces(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, 
     near_count, near_wall = all_walls(pos.shape[0], wall_normal.shape[0])
     gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
                   wall_axes(wall_normal), wall_hist, touching_walls(wall_hist), near_count, near_wall, gravity, ext_force,
-                  ext_damping, dim2, sum_f, sum_c, t, dt, force, torque, mass, mass, 0, pos, 0.0, parallel)
+                  ext_damping, True, dim2, sum_f, sum_c, t, dt, force, torque, mass, mass, 0, pos, 0.0, parallel)
 
 
 @njit(cache=True, error_model="numpy")
@@ -630,6 +636,7 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
     wall_axis = wall_axes(wall_normal)
     near_count, near_wall = near_walls(ref_pos, radius, wall_motion, wall_point0, wall_normal, skin, dim2, wall_hist,
                                          wall_touch)
+    has_ext = np.any(ext_force != 0.0) or np.any(ext_damping != 0.0)
     moved = _kick_drift(pos, vel, omega, force, torque, inv_mass, inv_inertia, dt, ref_pos, limit2)
     for s in range(nsteps):
         t = (step0 + s + 1) * dt
@@ -651,6 +658,7 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
                     dt, True, sum_f, sum_c, parallel)
         mode = 2 if s < nsteps - 1 else 1
         moved = gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
-                              wall_axis, wall_hist, wall_touch, near_count, near_wall, gravity, ext_force, ext_damping, dim2,
-                              sum_f, sum_c, t, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2, parallel)
+                              wall_axis, wall_hist, wall_touch, near_count, near_wall, gravity, ext_force, ext_damping,
+                              has_ext, dim2, sum_f, sum_c, t, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2,
+                              parallel)
     return row_start, partner, hist, slab_start, slab_members, rebuilds, last_reorder, reorders, combined

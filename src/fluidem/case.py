@@ -209,9 +209,9 @@ class Time(Strict):
 class Neighbours(Strict):
     skin: float | None = Field(None, gt=0.0, description="Verlet skin [m]; default 0.25 × largest diameter")
     reorder_interval: int | None = Field(
-        None, ge=0, description="soft spheres: renumber the particles in cell order at the first list rebuild this "
-        "many steps after the last (faster force loops; state.ids and the output keep each particle's number); "
-        "0 never; default 1000 from 1000 particles on, else 0")
+        None, ge=0, description="soft spheres: renumber the particles in cell order at set-up and at the first list "
+        "rebuild this many steps after the last (faster force loops; state.ids and the output keep each particle's "
+        "number); 0 never; default 1000 from 1000 particles on, else 0")
 
 
 class Output(Strict):

@@ -90,6 +90,23 @@ def test_renumbering_does_not_change_the_dynamics(tiny_bed_case, model):
     assert np.abs(sorted_.wall_hist[order] - plain.wall_hist).max() < 1e-6 * np.abs(plain.wall_hist).max()
 
 
+def test_particles_are_renumbered_at_set_up(tiny_bed_case):
+    """With renumbering on, the engine starts in cell order (the placed bed is not): the same particles
+    (by id: positions bitwise, the set-up forces to round-off), numbered so that cell_order is the identity."""
+    case, d = frictional_bed(tiny_bed_case, 0)
+    plain = SoftSphereEngine(case)
+    case, _ = frictional_bed(tiny_bed_case, 50)
+    sorted_ = SoftSphereEngine(case)
+    st = sorted_.state
+    assert not np.array_equal(st.ids, np.arange(150)) and sorted_.reorders == 0 and sorted_.steps == 0
+    for name in ("position", "velocity", "radius", "mass"):
+        assert np.array_equal(by_id(st, name), getattr(plain.state, name))
+    np.testing.assert_allclose(by_id(st, "force"), plain.state.force, rtol=0, atol=1e-12 * np.abs(plain.state.force).max())
+    assert np.array_equal(NK.cell_order(st.position, st.radius, sorted_.skin, sorted_.dim2), np.arange(150))
+    assert not np.array_equal(NK.cell_order(plain.state.position, plain.state.radius, plain.skin, plain.dim2),
+                              np.arange(150))
+
+
 def test_renumbering_is_the_same_in_any_chunks_and_on_any_threads(tiny_bed_case):
     """Renumbering happens at the first rebuild ``reorder_interval`` steps after the last one, whatever
     the calls: one call of 1500 steps and calls of 7 end bitwise alike; so do 1 and 2 threads."""

@@ -84,16 +84,16 @@ class SoftSphereEngine:
         self.time = 0.0
         self.steps = 0
         self.rebuilds = 0
-        self.ref_pos = st.position.copy()
-        self.row_start, self.partner, self.slab_start, self.slab_members = build_pairs(
-            st.position, st.radius, self.skin, self.dim2)
-        self.hist = np.zeros((self.partner.shape[0], 3))
-        contacts_first(st.position, st.radius, self.row_start, self.partner, self.hist)  # as every rebuild leaves it
         self.reorder_interval = self._reorder_interval()
         self.last_reorder = 0  # step of the last renumbering in cell order (see advance)
         self.reorders = 0
         if self.reorder_interval > 0:
             self._renumber()
+        self.ref_pos = st.position.copy()
+        self.row_start, self.partner, self.slab_start, self.slab_members = build_pairs(
+            st.position, st.radius, self.skin, self.dim2)
+        self.hist = np.zeros((self.partner.shape[0], 3))
+        contacts_first(st.position, st.radius, self.row_start, self.partner, self.hist)  # as every rebuild leaves it
         self.reorder_listeners = []  # callables f(order) told of each renumbering (new k is former order[k])
         self._compute_forces(update=False)
 
@@ -147,19 +147,17 @@ class SoftSphereEngine:
         return pp, pw, times
 
     def _renumber(self) -> None:
-        """Number the particles in slab and cell order now (as ``advance`` does every ``reorder_interval``
-        steps) and make the list anew; ``state.ids`` keep the particles' own numbers.
+        """At set-up, before the list is made: number the particles in slab and cell order (as ``advance``
+        does every ``reorder_interval`` steps); ``state.ids`` keep the particles' own numbers.
 
-        At set-up: a bed placed or loaded in any other order (a random fill, the tiles of the 100,000-sphere
-        bench bed) otherwise waits ``reorder_interval`` steps and a rebuild for it. The bench bed of 100,000
-        spheres renumbered so: 2.9e6 → 3.6e6 particle-steps/s on one thread, 4.3e6 → 6.4e6 on two."""
+        A bed placed or loaded in any other order (a random fill, the tiles of the 100,000-sphere bench
+        bed) would otherwise wait ``reorder_interval`` steps and a rebuild for it. The bench bed of 100,000
+        spheres renumbered so: 2.9e6 → 3.0–3.8e6 particle-steps/s on one thread, 4.3e6 → 5.3–6.2e6 on two."""
         st = self.state
-        _, self.row_start, self.partner, self.hist = K.reorder(
-            st.position, st.velocity, st.omega, st.force, st.torque, st.radius, st.mass, st.inertia, self.inv_mass,
-            self.inv_inertia, st.species, st.ids, self.ext_force, self.ext_damping, self.wall_hist, self.row_start,
-            self.partner, self.hist, self.skin, self.dim2)
-        self.row_start, self.partner, self.hist, self.slab_start, self.slab_members = K.rebuild(
-            st.position, st.radius, self.skin, self.dim2, self.row_start, self.partner, self.hist, self.ref_pos)
+        no_list = (np.zeros(st.n + 1, dtype=np.int64), np.empty(0, dtype=np.int32), np.empty((0, 3)))
+        K.reorder(st.position, st.velocity, st.omega, st.force, st.torque, st.radius, st.mass, st.inertia,
+                  self.inv_mass, self.inv_inertia, st.species, st.ids, self.ext_force, self.ext_damping, self.wall_hist,
+                  *no_list, self.skin, self.dim2)
 
     def _reorder_interval(self) -> int:
         """Steps between renumberings of the particles in cell order: the case's ``neighbours.reorder_interval``,

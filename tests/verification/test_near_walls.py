@@ -25,8 +25,10 @@ def run_near(pos, motion=None, dim2=False, hist=None, radius=A):
     n = pos.shape[0]
     motion = np.zeros((6, 6)) if motion is None else motion
     hist = np.zeros((n, 6, 3)) if hist is None else hist
-    touch = K.touching_walls(hist)
-    count, near = K.near_walls(pos, np.full(n, radius), motion, POINTS, NORMALS, SKIN, dim2, hist, touch)
+    touch = np.zeros((n, 6), dtype=bool)
+    count, near = np.empty(n, dtype=np.int64), np.empty((n, 6), dtype=np.int64)
+    K.near_walls(pos, np.full(n, radius), motion, POINTS, NORMALS, SKIN, dim2, hist, touch, count, near)
+    np.testing.assert_array_equal(touch, K.touching_walls(hist))  # filled: where a spring is set
     return [list(near[i, :count[i]]) for i in range(n)], hist, touch
 
 

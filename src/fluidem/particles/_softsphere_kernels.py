@@ -419,8 +419,11 @@ def touching_walls(wall_hist):
 
 
 @njit(cache=True, error_model="numpy")
-def near_walls(ref_pos, radius, wall_motion, wall_point0, wall_normal, skin, dim2, wall_hist, wall_touch):
-    """(near_count (N,), near_wall (N, W)): the walls each particle can touch before the next list rebuild.
+def near_walls(ref_pos, radius, wall_motion, wall_point0, wall_normal, skin, dim2, wall_hist, wall_touch, near_count,
+               near_wall):
+    """Fill near_count (N,) and near_wall (N, W) with the walls each particle can touch before the next list
+    rebuild (row i: near_wall[i, :near_count[i]]), and wall_touch (N, W): True where the wall spring
+    wall_hist[i, w] is not zero. The engine keeps the three from rebuild to rebuild (also across calls).
 
     Between rebuilds no particle is more than skin/2 from its place at the last one (``ref_pos``), so a
     static wall whose gap n·(x_ref − p) exceeds a + skin cannot be reached (in 2D, where centres move in
@@ -432,30 +435,33 @@ def near_walls(ref_pos, radius, wall_motion, wall_point0, wall_normal, skin, dim
     out of reach left that contact earlier: its spring is reset here (the per-step check did it then).
     """
     n, nw = ref_pos.shape[0], wall_normal.shape[0]
-    near_count = np.zeros(n, dtype=np.int64)
-    near_wall = np.empty((n, nw), dtype=np.int64)
-    for i in range(n):
+    moving = np.empty(nw, dtype=np.bool_)
+    reach = np.empty(nw)
+    for w in range(nw):
+        moving[w] = int(wall_motion[w, 0]) != STATIC
+        reach[w] = skin * math.sqrt(wall_normal[w, 0] ** 2 + wall_normal[w, 1] ** 2) if dim2 else skin
+    for i_ in range(n):
+        i = U(i_)
+        x = ref_pos[i, U(0)]
+        y = ref_pos[i, U(1)]
+        z = ref_pos[i, U(2)]
+        a = radius[i]
         c = 0
-        for w in range(nw):
-            reach = True
-            if int(wall_motion[w, 0]) == STATIC:
-                gap = ((ref_pos[i, 0] - wall_point0[w, 0]) * wall_normal[w, 0]
-                       + (ref_pos[i, 1] - wall_point0[w, 1]) * wall_normal[w, 1]
-                       + (ref_pos[i, 2] - wall_point0[w, 2]) * wall_normal[w, 2])
-                reach_by = skin
-                if dim2:
-                    reach_by = skin * math.sqrt(wall_normal[w, 0] ** 2 + wall_normal[w, 1] ** 2)
-                reach = gap < radius[i] + reach_by
-            if reach:
-                near_wall[i, c] = w
+        for w_ in range(nw):
+            w = U(w_)
+            gap = ((x - wall_point0[w, U(0)]) * wall_normal[w, U(0)] + (y - wall_point0[w, U(1)]) * wall_normal[w, U(1)]
+                   + (z - wall_point0[w, U(2)]) * wall_normal[w, U(2)])
+            touch = (wall_hist[i, w, U(0)] != 0.0) | (wall_hist[i, w, U(1)] != 0.0) | (wall_hist[i, w, U(2)] != 0.0)
+            if moving[w] or gap < a + reach[w]:
+                near_wall[i, U(c)] = w
                 c += 1
-            elif wall_touch[i, w]:
-                wall_hist[i, w, 0] = 0.0
-                wall_hist[i, w, 1] = 0.0
-                wall_hist[i, w, 2] = 0.0
-                wall_touch[i, w] = False
+            elif touch:
+                wall_hist[i, w, U(0)] = 0.0
+                wall_hist[i, w, U(1)] = 0.0
+                wall_hist[i, w, U(2)] = 0.0
+                touch = False
+            wall_touch[i, w] = touch
         near_count[i] = c
-    return near_count, near_wall
 
 
 @njit(cache=True, error_model="numpy")
@@ -601,7 +607,7 @@ def compute_forces(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, 
 def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia, species, pp, pw,
             wall_motion, wall_point0, wall_normal, wall_hist, gravity, ext_force, ext_damping, dim2,
             row_start, partner, hist, slab_start, slab_members, ref_pos, skin, step0, dt, nsteps, parallel,
-            inertia, ids, reorder_interval, last_reorder):
+            inertia, ids, reorder_interval, last_reorder, wall_touch, near_count, near_wall):
     """Run ``nsteps`` velocity-Verlet DEM steps from step ``step0`` (time step0 * dt).
 
     Order of one step::
@@ -623,6 +629,8 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
     only, so a run gives the same result however it is cut into calls. Also returns the step of the
     last reordering, the number of them in this call and their combined order (new k is former
     order[k]; empty if none).
+    ``wall_touch``, ``near_count``, ``near_wall``: the walls within reach (``near_walls``), made anew at each
+    rebuild; the caller keeps them between calls (made at set-up and after a restore).
     """
     limit2 = (0.5 * skin) ** 2
     sum_f = np.zeros_like(force)
@@ -632,10 +640,7 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
     combined = np.empty(0, dtype=np.int64)
     if nsteps <= 0:
         return row_start, partner, hist, slab_start, slab_members, rebuilds, last_reorder, 0, combined
-    wall_touch = touching_walls(wall_hist)
     wall_axis = wall_axes(wall_normal)
-    near_count, near_wall = near_walls(ref_pos, radius, wall_motion, wall_point0, wall_normal, skin, dim2, wall_hist,
-                                         wall_touch)
     has_ext = np.any(ext_force != 0.0) or np.any(ext_damping != 0.0)
     moved = _kick_drift(pos, vel, omega, force, torque, inv_mass, inv_inertia, dt, ref_pos, limit2)
     for s in range(nsteps):
@@ -646,13 +651,12 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
                     pos, vel, omega, force, torque, radius, mass, inertia, inv_mass, inv_inertia, species, ids,
                     ext_force, ext_damping, wall_hist, row_start, partner, hist, skin, dim2)
                 combined = order if combined.shape[0] == 0 else combined[order]
-                wall_touch = touching_walls(wall_hist)
                 last_reorder = step0 + s
                 reorders += 1
             row_start, partner, hist, slab_start, slab_members = rebuild(
                 pos, radius, skin, dim2, row_start, partner, hist, ref_pos)
-            near_count, near_wall = near_walls(ref_pos, radius, wall_motion, wall_point0, wall_normal, skin, dim2,
-                                               wall_hist, wall_touch)
+            near_walls(ref_pos, radius, wall_motion, wall_point0, wall_normal, skin, dim2, wall_hist, wall_touch,
+                       near_count, near_wall)
             rebuilds += 1
         pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
                     dt, True, sum_f, sum_c, parallel)

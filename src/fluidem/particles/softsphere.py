@@ -94,6 +94,7 @@ class SoftSphereEngine:
             st.position, st.radius, self.skin, self.dim2)
         self.hist = np.zeros((self.partner.shape[0], 3))
         contacts_first(st.position, st.radius, self.row_start, self.partner, self.hist)  # as every rebuild leaves it
+        self._reach_walls()
         self.reorder_listeners = []  # callables f(order) told of each renumbering (new k is former order[k])
         self._compute_forces(update=False)
 
@@ -145,6 +146,16 @@ class SoftSphereEngine:
                     times.append((law.contact_time(m_min[a], r_min[a], v, sp[a], plane.source),
                                   f"species {sp[a].name}–wall {plane.name}"))
         return pp, pw, times
+
+    def _reach_walls(self) -> None:
+        """The walls each particle can reach before the next list rebuild, from ``ref_pos`` (``K.near_walls``):
+        made here at set-up and after a restore, by ``advance`` at each rebuild; derived, not checkpointed."""
+        n, nw = self.state.n, self.wall_normal.shape[0]
+        self.wall_touch = np.empty((n, nw), dtype=np.bool_)
+        self.near_count = np.empty(n, dtype=np.int64)
+        self.near_wall = np.empty((n, nw), dtype=np.int64)
+        K.near_walls(self.ref_pos, self.state.radius, self.wall_motion, self.wall_point0, self.wall_normal, self.skin,
+                     self.dim2, self.wall_hist, self.wall_touch, self.near_count, self.near_wall)
 
     def _renumber(self) -> None:
         """At set-up, before the list is made: number the particles in slab and cell order (as ``advance``
@@ -234,7 +245,8 @@ class SoftSphereEngine:
             self.inv_inertia, st.species, self.pp, self.pw, self.wall_motion, self.wall_point0, self.wall_normal,
             self.wall_hist, self.gravity, self.ext_force, self.ext_damping, self.dim2, self.row_start, self.partner, self.hist,
             self.slab_start, self.slab_members, self.ref_pos, self.skin, self.steps, self.dt, nsteps,
-            numba.get_num_threads() > 1, st.inertia, st.ids, self.reorder_interval, self.last_reorder)
+            numba.get_num_threads() > 1, st.inertia, st.ids, self.reorder_interval, self.last_reorder,
+            self.wall_touch, self.near_count, self.near_wall)
         self.steps += nsteps
         self.time = self.steps * self.dt
         self.rebuilds += nreb
@@ -269,6 +281,7 @@ class SoftSphereEngine:
         self.ext_damping[...] = arrays.get("engine/ext_damping", 0.0)  # checkpoints before it existed: none
         for k in ("row_start", "partner", "hist", "slab_start", "slab_members"):
             setattr(self, k, np.ascontiguousarray(arrays[f"engine/{k}"]))
+        self._reach_walls()
         self.dt = float(scalars["dt"])
         self.steps = int(scalars["steps"])
         self.rebuilds = int(scalars["rebuilds"])

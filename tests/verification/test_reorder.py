@@ -52,7 +52,7 @@ def test_renumbered_list_keeps_every_pair_and_its_history():
     before = {(int(new_index[i]), int(new_index[j])): tuple(h) for i, j, h in zip(owner, partner, hist)}
     after = {(int(i), int(j)): tuple(h) for i, j, h in zip(owner2, partner2, hist2)}
     assert after == before
-    for i in range(pos.shape[0]):  # rows ascending, as carry_history's binary search needs
+    for i in range(pos.shape[0]):  # rows ascending (renumber_pairs sorts them; the next rebuild puts touching pairs first)
         assert np.all(np.diff(partner2[rs2[i]:rs2[i + 1]]) > 0)
 
 

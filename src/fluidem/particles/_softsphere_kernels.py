@@ -503,7 +503,7 @@ def gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_
     the next step's half kick and drift (``force`` and ``torque`` are then not stored: the next step's
     pass overwrites them unread). ``has_ext`` False: ext_force and ext_damping are zero (not read). Returns how many particles moved more
     than sqrt(limit2) from ``ref_pos`` (mode 2), else 0. Leaves sum_f and sum_c zero.
-    ``wall_touch`` (N, W) bool: False where wall_hist[i, w] is zero (see touching_walls); kept so.
+    ``wall_touch`` (N, W) bool: False where wall_hist[i, w] is zero (filled by near_walls); kept so.
     ``wall_axis``: ``wall_axes(wall_normal)``, made once by the caller (the walls' normals do not change).
     ``near_count``, ``near_wall``: the walls each particle is checked against (``near_walls``; all walls: ``all_walls``).
     Each particle's arithmetic is the same on any number of threads (``parallel`` False: no parallel region).

@@ -228,7 +228,7 @@ class SoftSphereEngine:
                          self.wall_motion, self.wall_point0, self.wall_normal, self.wall_hist, self.gravity,
                          self.ext_force, self.ext_damping, self.dim2, self.row_start, self.partner, self.hist, self.slab_start,
                          self.slab_members, self.time, self.dt, update, st.force, st.torque,
-                         numba.get_num_threads() > 1)
+                         numba.get_num_threads())
 
     def external_force(self) -> np.ndarray:
         """The external (gas) force on each particle at the current velocity, ext_force − c v [N], (N, 3)."""
@@ -245,7 +245,7 @@ class SoftSphereEngine:
             self.inv_inertia, st.species, self.pp, self.pw, self.wall_motion, self.wall_point0, self.wall_normal,
             self.wall_hist, self.gravity, self.ext_force, self.ext_damping, self.dim2, self.row_start, self.partner, self.hist,
             self.slab_start, self.slab_members, self.ref_pos, self.skin, self.steps, self.dt, nsteps,
-            numba.get_num_threads() > 1, st.inertia, st.ids, self.reorder_interval, self.last_reorder,
+            numba.get_num_threads(), st.inertia, st.ids, self.reorder_interval, self.last_reorder,
             self.wall_touch, self.near_count, self.near_wall)
         self.steps += nsteps
         self.time = self.steps * self.dt

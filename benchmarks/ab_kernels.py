@@ -63,7 +63,7 @@ def main() -> None:
     ap.add_argument("--bursts", type=int, default=20, help="bursts per version")
     ap.add_argument("--per", type=int, default=0, help="steps per burst (default 200 DEM / 50 gas steps)")
     ap.add_argument("--threads", type=int, default=None,
-                    help="threads of the coupled run (default: the case's, one below 4000 particles)")
+                    help="threads of the coupled run (default: the case's, one per 1200 particles)")
     args = ap.parse_args()
     if args.problem == "coupled" and not args.run_dir:
         ap.error("--problem coupled needs --from RUN_DIR")

@@ -1,13 +1,16 @@
 """Thread set-up for Numba's parallel kernels.
 
-Small systems run on one thread by default: below a few thousand particles a DEM
-step takes tens of microseconds, less than the cost of waking a thread team, and
-on a machine whose other cores are busy every parallel region waits for a
-descheduled thread (measured here: 2 threads ran the 500-particle pour 50x slower
-than 1 while another process held the second core).
+By default a run takes one thread per PARTICLES_PER_THREAD particles, up to all cores. A
+thread's share must be worth waking it for: a soft-sphere step of a few hundred particles takes
+tens of microseconds, about what a parallel region costs, and on a machine whose other cores are
+busy every parallel region waits for a descheduled thread (measured here: 2 threads ran the
+500-particle pour 50x slower than 1 while another process held the second core). With 1200
+particles each, two threads run the 2400-particle tsuji-jet bed 1.15-1.2x faster than one
+(``benchmarks/threads_ab.py``; the DEM alone 1.2-1.4x), as each keeps its own block of particles
+(``_softsphere_kernels.thread_blocks``).
 """
 
-SERIAL_BELOW = 4000  # particles
+PARTICLES_PER_THREAD = 1200
 
 
 def prefer_openmp() -> None:
@@ -32,12 +35,13 @@ def prefer_openmp() -> None:
 
 
 def set_threads(n: int | None, n_particles: int | None = None) -> int:
-    """Use ``n`` compute threads (None: one for small systems, else all cores); returns the number in use."""
+    """Use ``n`` compute threads (None: one per PARTICLES_PER_THREAD particles, at least one, at most all
+    cores; all cores when the count is not given); returns the number in use."""
     import numba
 
-    if n is None and n_particles is not None and n_particles < SERIAL_BELOW:
-        n = 1
     if n is None:
         n = numba.config.NUMBA_NUM_THREADS
+        if n_particles is not None:
+            n = min(n, max(1, int(n_particles) // PARTICLES_PER_THREAD))
     numba.set_num_threads(max(1, min(int(n), numba.config.NUMBA_NUM_THREADS)))
     return numba.get_num_threads()

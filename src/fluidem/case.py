@@ -232,7 +232,7 @@ class Case(Strict):
     time: Time
     neighbours: Neighbours = Field(default_factory=Neighbours)
     output: Output = Field(default_factory=Output)
-    threads: int | None = Field(None, ge=1, description="compute threads; default all cores (one below 4000 particles)")
+    threads: int | None = Field(None, ge=1, description="compute threads; default one per 1200 particles, at most all cores")
     gas: GasSection | None = Field(None, description="gas phase; omit for a DEM-only run")
     coupling: CouplingSection | None = Field(None, description="gas–particle exchange; default with [gas]")
 

@@ -109,7 +109,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--out", help="run directory (default runs/<case>-<timestamp>); must be new or empty")
     r.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="override a case key by dotted name, e.g. --set particles.contact.restitution=1.0")
-    r.add_argument("--threads", type=int, help="compute threads (default: all cores; one below 4000 particles)")
+    r.add_argument("--threads", type=int, help="compute threads (default: one per 1200 particles, at most all cores)")
     r.add_argument("--resume", metavar="DIR", help="continue a stopped run from DIR/restart.h5")
     r.add_argument("--quiet", action="store_true", help="no progress lines")
     r.set_defaults(func=cmd_run)

@@ -6,9 +6,12 @@ Published area fraction of the settled bed: 0.832 ± 0.010 (Hoomans, hard sphere
 Known disagreement (recorded, not tuned away): our soft-sphere `pour` case settles
 denser, 0.846–0.859 over four placement seeds (1996, 1, 2, 3) with k_n = 800 N/m, and
 0.854 with k_n = 8000 N/m (overlaps 10× smaller), so it is not contact compliance.
-The published-span test is therefore a strict xfail: it turns into a failure the day
-the model agrees, so the note is revisited. The hexagonal bound is a hard law.
-Each test runs the full case (1.5 s simulated, 20–40 s on 2 cores).
+A single pour is chaotic: a change of round-off alone (the flat 2D pair loop, ninth session)
+moved seed 1996 from 0.8476 to 0.8416, just inside the span, while seeds 1–5 gave
+0.853, 0.848, 0.848, 0.852, 0.856. The published-span test therefore reads the mean over
+the four seeds (0.848 now) and is a strict xfail: it turns into a failure the day the model
+agrees, so the note is revisited. The hexagonal bound is a hard law, checked on every pour.
+The four pours run the full case (1.5 s simulated, 8–40 s each).
 """
 import json
 import math
@@ -24,21 +27,31 @@ PUBLISHED_HIGH = 0.832 + 0.010  # Hoomans' value plus its stated uncertainty
 HEXAGONAL = math.pi / (2 * math.sqrt(3))  # 0.9069, densest packing of equal discs
 
 
+SEEDS = (1996, 1, 2, 3)  # the case's own placement seed and three more
+
+
 @pytest.fixture(scope="module")
-def summary(tmp_path_factory):
-    out = tmp_path_factory.mktemp("pour") / "run"
-    assert main(["run", "pour", "--out", str(out), "--quiet"]) == 0
-    return json.loads((out / "summary.json").read_text())
+def summaries(tmp_path_factory):
+    out = []
+    for seed in SEEDS:
+        run = tmp_path_factory.mktemp("pour") / f"seed{seed}"
+        assert main(["run", "pour", "--out", str(run), "--quiet", "--set", f"particles.placement.seed={seed}"]) == 0
+        out.append(json.loads((run / "summary.json").read_text()))
+    return out
 
 
-def test_pour_settles_below_the_hexagonal_bound(summary):
-    assert summary["status"] == "completed"
-    # settled: kinetic energy far below the ~1e-2 J of potential energy released
-    assert summary["kinetic_energy_J"] < 1e-8
-    assert summary["packing_fraction"] < HEXAGONAL
+def test_pour_settles_below_the_hexagonal_bound(summaries):
+    for summary in summaries:
+        assert summary["status"] == "completed"
+        # settled: kinetic energy far below the ~1e-2 J of potential energy released
+        assert summary["kinetic_energy_J"] < 1e-8
+        assert summary["packing_fraction"] < HEXAGONAL
 
 
-@pytest.mark.xfail(strict=True, reason="soft-sphere pour packs 0.846-0.859 (4 seeds) vs published 0.80-0.842")
-def test_pour_packing_fraction_in_published_span(summary):
-    phi = summary["packing_fraction"]
-    assert PUBLISHED_LOW <= phi <= PUBLISHED_HIGH, f"packing fraction {phi:.4f} outside published span"
+@pytest.mark.xfail(strict=True, reason="soft-sphere pour packs 0.848 on average over 4 seeds (0.842-0.853) vs "
+                                       "published 0.80-0.842")
+def test_pour_packing_fraction_in_published_span(summaries):
+    phis = [s["packing_fraction"] for s in summaries]
+    phi = sum(phis) / len(phis)
+    assert PUBLISHED_LOW <= phi <= PUBLISHED_HIGH, \
+        f"mean packing fraction {phi:.4f} over seeds {SEEDS} ({', '.join(f'{p:.4f}' for p in phis)}) outside the span"

@@ -104,3 +104,25 @@ def test_a_moving_wall_from_far_away_strikes_a_resting_particle(tmp_path):
     eng.advance(int(0.1 / eng.dt))  # the piston arrives after 0.08 s
     assert eng.state.velocity[0, 1] == pytest.approx(1.7 * 0.5, rel=0.01)
     assert math.isclose(eng.state.position[0, 0], 0.1)
+
+
+@pytest.mark.parametrize("first", [[0, 150, 400], [0, 0, 400], [0, 37, 38, 400], [0, 400, 400, 400]])
+def test_any_split_over_threads_gives_the_same_lists(all_threads, first):
+    """The threads' particle ranges (``first``, as the engine passes them) change nothing: each particle's rows are
+    its own. Random particles near and far from the walls, springs set on some walls (reset where out of reach)."""
+    rng = np.random.default_rng(4)
+    n = 400
+    pos = rng.uniform(0.0, 1.0, (n, 3))
+    hist = np.where(rng.uniform(size=(n, 6, 1)) < 0.3, rng.normal(0.0, 1e-6, (n, 6, 3)), 0.0)
+    outs = []
+    for split in (None, np.array(first)):
+        h = hist.copy()
+        touch = np.zeros((n, 6), dtype=bool)
+        count, near = np.full(n, -1, dtype=np.int64), np.full((n, 6), -1, dtype=np.int64)
+        K.near_walls(pos, np.full(n, A), np.zeros((6, 6)), POINTS, NORMALS, SKIN, False, h, touch, count, near, split)
+        outs.append((h, touch, count, [list(near[i, :count[i]]) for i in range(n)]))
+    serial, split = outs
+    assert 0 < sum(len(r) for r in serial[3]) < 6 * n
+    for a, b in zip(serial[:3], split[:3]):
+        np.testing.assert_array_equal(a, b)
+    assert serial[3] == split[3]

@@ -100,9 +100,10 @@ def test_cell_list_degenerate_layouts():
 
 
 @pytest.mark.parametrize("dim2", [False, True], ids=["3d", "2d"])
-def test_contacts_first_keeps_every_pair_with_its_history(dim2):
+def test_contacts_first_keeps_every_pair_with_its_history(all_threads, dim2):
     """Each row after contacts_first: the same partners with the same springs, the touching pairs first,
-    each part in its former (ascending) order; rows with no contact or no far pair unchanged."""
+    each part in its former (ascending) order; rows with no contact or no far pair unchanged. On every thread:
+    the rows are reordered in work items of ROWS_PER_ITEM (600 rows: three)."""
     rng = np.random.default_rng(5)
     pos, radius = random_packing(3, 600, dim2, solid_fraction=0.5)
     rs, partner, _, _ = build_pairs(pos, radius, 0.5e-3, dim2)

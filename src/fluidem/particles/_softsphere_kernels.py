@@ -239,6 +239,19 @@ def thread_blocks(row_start, slab_start, slab_members, nthreads):
     return block
 
 
+@njit(cache=True, error_model="numpy")
+def _slab_run(start, stop, flat, pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start,
+              slab_members, hist, dt, update, sum_f, sum_c):
+    """The pairs of slabs start, start + 2, … below stop (one parity), flat or general."""
+    for s in range(start, stop, 2):
+        if flat:
+            _slab_pairs_flat(s, pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start,
+                             slab_members, hist, dt, update, sum_f, sum_c)
+        else:
+            _slab_pairs(s, pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members,
+                        hist, dt, update, sum_f, sum_c)
+
+
 @njit(cache=True, error_model="numpy", parallel=True)
 def _pair_forces_parallel(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members,
                           hist, dt, update, sum_f, sum_c, block, flat):
@@ -246,14 +259,8 @@ def _pair_forces_parallel(pos, vel, omega, radius, mass, species, pp, row_start,
     nthreads = block.shape[0] - 1
     for phase in range(2):
         for k in prange(nthreads):
-            lo = block[k] + (block[k] + phase) % 2
-            for s in range(lo, block[k + 1], 2):
-                if flat:
-                    _slab_pairs_flat(s, pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start,
-                                     slab_members, hist, dt, update, sum_f, sum_c)
-                else:
-                    _slab_pairs(s, pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start,
-                                slab_members, hist, dt, update, sum_f, sum_c)
+            _slab_run(block[k] + (block[k] + phase) % 2, block[k + 1], flat, pos, vel, omega, radius, mass, species,
+                      pp, row_start, partner, slab_start, slab_members, hist, dt, update, sum_f, sum_c)
 
 
 @njit(cache=True, error_model="numpy")
@@ -271,15 +278,9 @@ def pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, 
         _pair_forces_parallel(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start,
                               slab_members, hist, dt, update, sum_f, sum_c, block, flat)
         return
-    nslab = slab_start.shape[0] - 1
     for phase in range(2):
-        for h in range((nslab - phase + 1) // 2):
-            if flat:
-                _slab_pairs_flat(2 * h + phase, pos, vel, omega, radius, mass, species, pp, row_start, partner,
-                                 slab_start, slab_members, hist, dt, update, sum_f, sum_c)
-            else:
-                _slab_pairs(2 * h + phase, pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start,
-                            slab_members, hist, dt, update, sum_f, sum_c)
+        _slab_run(phase, slab_start.shape[0] - 1, flat, pos, vel, omega, radius, mass, species, pp, row_start, partner,
+                  slab_start, slab_members, hist, dt, update, sum_f, sum_c)
 
 
 @njit(cache=True, error_model="numpy")

@@ -97,6 +97,20 @@ def test_a_state_of_another_grid_is_a_case_error():
         box().advance(state, 1e-4)
 
 
+def test_an_array_replaced_after_a_good_step_is_checked_again():
+    """The solver skips the state check while the state holds the arrays it found right; a replaced one is
+    checked (and refused) at the next step."""
+    solver = box()
+    state = solver.initial_state()
+    solver.advance(state, 1e-4)
+    state.v = np.zeros((5, 4))
+    with pytest.raises(CaseError, match=r"gas state.v: shape \(5, 4\) does not match \(5, 5\)"):
+        solver.advance(state, 1e-4)
+    state.v = np.zeros((5, 5), dtype=np.float32)
+    with pytest.raises(CaseError, match=r"gas state.v: must be a C-contiguous float64"):
+        solver.advance(state, 1e-4)
+
+
 def test_a_step_far_beyond_the_stability_limit_raises():
     solver = box(GasProperties(density=1.2))
     state = solver.initial_state(velocity=(0.0, 1.0))

@@ -104,6 +104,7 @@ class GasCoupling:
         self._paired_ready = False  # K_p / cell inputs of a gas step at hand (else forces as "cell_beta")
         xc, yc = I._axes(self.grid, "centre")[:2]
         self._nodes = (xc, yc, self.grid.x_faces, self.grid.y_faces)  # interpolation nodes, Hoomans eqs 40-41
+        self._gas_ok = None  # the gas arrays _check_gas found right
         smap = self._map()
         self.state = self.solver.initial_state(voidage=smap.voidage, velocity=self.section.initial_velocity)
         self.gas_steps = 0
@@ -188,13 +189,21 @@ class GasCoupling:
         return st
 
     def _check_gas(self) -> None:
-        """The kernels index the gas arrays by the grid's shape: refuse any other (e.g. a replaced ``state``)."""
+        """The kernels index the gas arrays by the grid's shape: refuse any other (e.g. a replaced ``state``).
+
+        Arrays found right once are remembered (references, so that their identities stay theirs) and not
+        checked again while the state holds the same objects: twice a gas step otherwise."""
         gd, gs = self.grid, self.state
+        ok = self._gas_ok
+        if ok is not None and ok[0] is gs.p and ok[1] is gs.rho and ok[2] is gs.voidage and ok[3] is gs.u \
+                and ok[4] is gs.v:
+            return
         for k, shape in (("p", gd.shape), ("rho", gd.shape), ("voidage", gd.shape), ("u", gd.u_shape),
                          ("v", gd.v_shape)):
             a = getattr(gs, k)
             if a.shape != shape or a.dtype != np.float64:
                 raise ValueError(f"gas state {k}: expected {shape} float64, got {a.shape} {a.dtype}")
+        self._gas_ok = (gs.p, gs.rho, gs.voidage, gs.u, gs.v)
 
     def gas_step(self) -> None:
         """Steps 1-4 of the module docstring: map, the gas's β, advance the gas by DT, the particle forces.

@@ -201,7 +201,8 @@ class VoidageMapping(BaseModel):
         self._check()
         mcode, wcode = _codes(self.method, self.velocity_weighting)
         rx, ry, steps = _diffusion_steps(grid, self.smoothing_width) if self.smoothing_width > 0.0 else (0.0, 0.0, 0)
-        eps, su, sv = (np.empty(grid.shape) for _ in range(3))
+        shape = grid.shape
+        eps, su, sv = np.empty(shape), np.empty(shape), np.empty(shape)
         clipped = K.map_solids(mcode, wcode, position, radius, volume, velocity, grid.dx, grid.dy,
                                _norm(grid, self.method), rx, ry, steps, self.to_3d, EQ49_FACTOR,
                                self.minimum_voidage, eps, su, sv)

@@ -47,6 +47,7 @@ same way: centre arrays by one ring, velocity arrays by two (for the TVD stencil
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Mapping
 
 import numpy as np
@@ -122,50 +123,51 @@ class StaggeredGrid:
         object.__setattr__(self, "depth", float(self.depth))
 
     # ------------------------------------------------------------ sizes
-    @property
+    # cached: the grid is frozen, and a coupled run reads these many times a gas step
+    @cached_property
     def nx(self) -> int:
         return self.cells[0]
 
-    @property
+    @cached_property
     def ny(self) -> int:
         return self.cells[1]
 
-    @property
+    @cached_property
     def dx(self) -> float:
         """Cell width [m] (Hoomans' DX)."""
         return self.size[0] / self.nx
 
-    @property
+    @cached_property
     def dy(self) -> float:
         """Cell height [m] (Hoomans' DY)."""
         return self.size[1] / self.ny
 
-    @property
+    @cached_property
     def cell_volume(self) -> float:
         """dx dy depth [m^3]."""
         return self.dx * self.dy * self.depth
 
-    @property
+    @cached_property
     def area_x(self) -> float:
         """Area of an x-face, dy depth [m^2]."""
         return self.dy * self.depth
 
-    @property
+    @cached_property
     def area_y(self) -> float:
         """Area of a y-face, dx depth [m^2]."""
         return self.dx * self.depth
 
-    @property
+    @cached_property
     def shape(self) -> tuple[int, int]:
         """Shape of centre arrays (p, rho, voidage): (nx, ny)."""
         return (self.nx, self.ny)
 
-    @property
+    @cached_property
     def u_shape(self) -> tuple[int, int]:
         """Shape of x-face arrays (u): (nx + 1, ny)."""
         return (self.nx + 1, self.ny)
 
-    @property
+    @cached_property
     def v_shape(self) -> tuple[int, int]:
         """Shape of y-face arrays (v): (nx, ny + 1)."""
         return (self.nx, self.ny + 1)

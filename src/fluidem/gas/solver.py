@@ -71,6 +71,11 @@ COARSEST = 64  # cells of the coarsest multigrid level (dense LU) at most
 AMG_RATE = 0.1  # pyamg path: keep the hierarchy while FGMRES cuts the residual at least this much per iteration
 
 
+def _ready(a, shape) -> bool:
+    """``a`` is a C-contiguous float64 ndarray of ``shape``: a kernel input as it is."""
+    return type(a) is np.ndarray and a.shape == shape and a.dtype == _F64 and a.flags.c_contiguous
+
+
 def _import_pyamg():
     """The pyamg module, or the CaseError of ``linear_solver = "pyamg"`` without it."""
     try:
@@ -314,6 +319,7 @@ class GasSolver:
         self._set_boundary_values(0.0)
         self.C[K.C_PFIX_OLD] = self.C[K.C_PFIX]
         self._shapes = (grid.shape, grid.u_shape, grid.v_shape)
+        self._state_ok = None  # the state arrays _check_state found right
         self._set_iterate_args()
 
     def _set_iterate_args(self):
@@ -720,6 +726,12 @@ class GasSolver:
             raise CaseError(f"gas voidage: value {bad!r} outside (0, 1]")
 
     def _check_state(self, state: GasState) -> None:
+        """Shapes, dtype and layout of the state's arrays; arrays found right once are remembered
+        (references) and not checked again while the state holds the same objects."""
+        ok = self._state_ok
+        if ok is not None and ok[0] is state.p and ok[1] is state.rho and ok[2] is state.voidage \
+                and ok[3] is state.u and ok[4] is state.v:
+            return
         c, fu, fv = self._shapes
         for key, shape in (("p", c), ("rho", c), ("voidage", c), ("u", fu), ("v", fv)):
             a = getattr(state, key, None)
@@ -729,6 +741,7 @@ class GasSolver:
             if a.dtype != np.float64 or not a.flags.c_contiguous:
                 raise CaseError(f"gas state.{key}: must be a C-contiguous float64 array (as initial_state makes it), "
                                 f"not {a.dtype} {'contiguous' if a.flags.c_contiguous else 'strided'}")
+        self._state_ok = (state.p, state.rho, state.voidage, state.u, state.v)
 
     # ------------------------------------------------------------ time step
     def advance(self, state: GasState, dt: float, t: float = 0.0, *, voidage=None, beta=None, solids_u=None,
@@ -778,14 +791,14 @@ class GasSolver:
             modes[K.IN_VOIDAGE] = K.IN_NONE
         else:
             eps_new = voidage
-            if not (type(eps_new) is np.ndarray and eps_new.shape == c_shape and eps_new.dtype == _F64
-                    and eps_new.flags.c_contiguous):
+            if not _ready(eps_new, c_shape):
                 eps_new = np.ascontiguousarray(self._centre_array("voidage", voidage), dtype=float)
             modes[K.IN_VOIDAGE] = K.IN_CENTRE
         if isinstance(solids_u, (tuple, list)) or isinstance(solids_v, (tuple, list)):
             raise CaseError("gas solids_u / solids_v: give one array each (faces or centres), not a pair")
         if isinstance(beta, (tuple, list)) and len(beta) == 2:
-            bu, bv = (np.ascontiguousarray(self._face_array(f"beta[{k}]", b, shape, centre_ok=False), dtype=float)
+            bu, bv = (b if _ready(b, shape) else
+                      np.ascontiguousarray(self._face_array(f"beta[{k}]", b, shape, centre_ok=False), dtype=float)
                       for k, (b, shape) in enumerate(zip(beta, (su, sv))))
             modes[K.IN_BETA] = K.IN_FACE
         else:

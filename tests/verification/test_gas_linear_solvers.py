@@ -81,6 +81,18 @@ def test_band_refactorises_only_the_blocks_that_changed_and_equals_superlu():
     assert band.factorisations > 1 and blocks < 0.8 * band.factorisations * band._band.shape[0]
 
 
+@pytest.mark.parametrize("nx, ny", [(1, 3), (1, 4), (2, 3), (3, 2), (5, 9), (13, 20), (17, 6)])
+def test_band_equals_superlu_on_small_and_padded_grids(nx, ny):
+    """The band blocks are padded with zero columns to a multiple of 4 where the work rows hold them
+    (``GasSolver``: 15 → 16, 13 → 16; not for a grid of fewer cells than that): the same steps as SuperLU."""
+    band, s_band, i_band = bed_steps(nx, ny, "band", 5)
+    lu, s_lu, i_lu = bed_steps(nx, ny, "superlu", 5)
+    assert band.linear_solver == "band" and all(i.converged for i in i_band + i_lu)
+    bw = band._band.shape[1]
+    assert band._band.shape[2] == (-(-bw // 4) * 4 if -(-bw // 4) * 4 <= nx * ny else bw)
+    assert_same_steps(s_band, s_lu)
+
+
 def test_multigrid_constant_density_and_periodic_sides():
     """Constant density (the matrix is a pure diffusion operator) in a box periodic along x, and
     a box periodic both ways: the multigrid path against SuperLU."""

@@ -507,7 +507,10 @@ class GasSolver:
         self._ipar[K.I_SOLVER] = solver
         self._ipar[K.I_BW] = bw
         banded = solver == K.SOLVER_BAND
-        self._band = np.zeros((n // bw, bw, bw) if banded else (1, 1, 1))  # block-tridiagonal LU
+        # block-tridiagonal LU; each block's rows padded with zeros to a multiple of 4 entries where the
+        # work rows (n long) hold them: the elimination's row operations then fill whole vectors
+        bwp = -(-bw // 4) * 4
+        self._band = np.zeros((n // bw, bw, bwp if bwp <= n else bw) if banded else (1, 1, 1))
         self._band_lu = np.zeros((2, n // bw, bw) if banded else (2, 1, 1))
         self._csc_indices = self._indices.astype(np.int64)
         self._csc_indptr = self._indptr.astype(np.int64)

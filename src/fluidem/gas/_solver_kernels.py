@@ -44,7 +44,7 @@ from .grid import (  # cell flags, Hoomans 1996 Table 1
     PERIODIC,
 )
 
-U = np.uintp  # unsigned array index: no wrap-around code for negative indices (band LU)
+UI = np.uintp  # unsigned array index: no wrap-around code for negative indices (``U`` is the x velocity here)
 
 # face kinds: momentum solved / value fixed (wall, inflow) / continuous outflow / periodic duplicate of face 0
 SOLVED, FIXED, OUTFLOW_FACE, COPY = 0, 1, 2, 3
@@ -569,21 +569,23 @@ def _face_fluxes(W, C, F, K, idt, ih, area):
     has_outflow = False
     da, db = face_axis(P, K)
     n1, n2 = kind.shape[0], kind.shape[1]
-    for i in range(n1):
-        for j in range(n2):
+    for i_ in range(n1):  # unsigned indices: no wrap-around code (module docstring)
+        i = UI(i_)
+        for j_ in range(n2):
+            j = UI(j_)
             k = kind[i, j]
-            la, lb, ra, rb = i + 1 - da, j + 1 - db, i + 1, j + 1
+            la, lb, ra, rb = UI(i_ + 1 - da), UI(j_ + 1 - db), i + UI(1), j + UI(1)
             if k == SOLVED:
                 rf = 0.5 * (RHO[la, lb] + RHO[ra, rb])
                 ef = EF[i, j]
                 m = ef * rf
                 a = m * idt + beta[i, j]
                 w = (m * X1[i, j] + X2[i, j] - ef * (P[ra, rb] - P[la, lb]) * ih) / a
-                W[i + 2, j + 2] = w
+                W[i + UI(2), j + UI(2)] = w
                 FL[i, j] = area * ef * rf * w
             elif k == FIXED:
                 w = fix[i, j]
-                W[i + 2, j + 2] = w
+                W[i + UI(2), j + UI(2)] = w
                 FL[i, j] = area * EF[i, j] * 0.5 * (RHO[la, lb] + RHO[ra, rb]) * w
             elif k == OUTFLOW_FACE:
                 FL[i, j] = 0.0
@@ -608,9 +610,9 @@ def _boundary_flows(F, K):
     net_in = 0.0
     n1, n2 = kind.shape[0], kind.shape[1]
     for i in range(n1):
-        for j in range(n2):
-            if i != 0 and i != n1 - 1 and j != 0 and j != n2 - 1:
-                continue
+        edge = i == 0 or i == n1 - 1
+        step = 1 if edge or n2 < 2 else n2 - 1  # inside rows: their first and last face only
+        for j in range(0, n2, step):
             s = sign[i, j]
             k = kind[i, j]
             if s == 0 or k == COPY or k == OUTFLOW_FACE:
@@ -684,11 +686,13 @@ def predict_residual(U, V, C, FU, FV, KU, KV, row_of, R, fpar, ipar):
     acc_abs = 0.0
     mass = 0.0
     vdt = vol * idt
-    for i in range(nx):
-        for j in range(ny):
-            er = E[i + 1, j + 1] * RHO[i + 1, j + 1]
-            a = vdt * (er - RO[i + 1, j + 1])
-            R[i * ny + j] = a + ((FLU[i + 1, j] - FLU[i, j]) + (FLV[i, j + 1] - FLV[i, j]))
+    for i_ in range(nx):
+        i = UI(i_)
+        for j_ in range(ny):
+            j = UI(j_)
+            er = E[i + UI(1), j + UI(1)] * RHO[i + UI(1), j + UI(1)]
+            a = vdt * (er - RO[i + UI(1), j + UI(1)])
+            R[i * UI(ny) + j] = a + ((FLU[i + UI(1), j] - FLU[i, j]) + (FLV[i, j + UI(1)] - FLV[i, j]))
             acc += a
             acc_abs += abs(a)
             mass += er
@@ -845,7 +849,7 @@ def _invert_in_place(A, rows):
     while k < m:
         two = k + 1 < m
         for q in range(2 if two else 1):  # eliminate inside the pair of rows k, k + 1
-            kk = U(k + q)
+            kk = UI(k + q)
             piv = A[kk, kk]
             pmin = min(pmin, abs(piv))
             if piv == 0.0:
@@ -853,39 +857,39 @@ def _invert_in_place(A, rows):
             inv = 1.0 / piv
             A[kk, kk] = 1.0
             for c in range(mp):
-                A[kk, U(c)] *= inv
+                A[kk, UI(c)] *= inv
             if two:
-                ko = U(k + 1 - q)
+                ko = UI(k + 1 - q)
                 f = A[ko, kk]
                 A[ko, kk] = 0.0
                 for c in range(mp):
-                    A[ko, U(c)] -= f * A[kk, U(c)]
-        uk = U(k)
+                    A[ko, UI(c)] -= f * A[kk, UI(c)]
+        uk = UI(k)
         if not two:  # the last pivot alone, on the rows above it
             for c in range(mp):
-                rows[U(0), U(c)] = A[uk, U(c)]
+                rows[UI(0), UI(c)] = A[uk, UI(c)]
             for r in range(k):
-                ur = U(r)
+                ur = UI(r)
                 f = A[ur, uk]
                 if f != 0.0:
                     A[ur, uk] = 0.0
                     for c in range(mp):
-                        A[ur, U(c)] -= f * rows[U(0), U(c)]
+                        A[ur, UI(c)] -= f * rows[UI(0), UI(c)]
             break
-        uk1 = U(k + 1)
+        uk1 = UI(k + 1)
         for c in range(mp):
-            rows[U(0), U(c)] = A[uk, U(c)]
-            rows[U(1), U(c)] = A[uk1, U(c)]
+            rows[UI(0), UI(c)] = A[uk, UI(c)]
+            rows[UI(1), UI(c)] = A[uk1, UI(c)]
         for r in range(m):
             if r == k or r == k + 1:
                 continue
-            ur = U(r)
+            ur = UI(r)
             f0 = A[ur, uk]
             f1 = A[ur, uk1]
             A[ur, uk] = 0.0
             A[ur, uk1] = 0.0
             for c in range(mp):
-                A[ur, U(c)] -= f0 * rows[U(0), U(c)] + f1 * rows[U(1), U(c)]
+                A[ur, UI(c)] -= f0 * rows[UI(0), UI(c)] + f1 * rows[UI(1), UI(c)]
         k += 2
     return pmin
 
@@ -962,15 +966,15 @@ def _block_matvec(T, v, y):
     c = 0
     while c + 1 < m:  # two-index subscripts: no row views (``_invert_in_place``)
         v0, v1 = v[c], v[c + 1]
-        uc, uc1 = U(c), U(c + 1)
+        uc, uc1 = UI(c), UI(c + 1)
         for a in range(mp):
-            y[U(a)] += T[uc, U(a)] * v0 + T[uc1, U(a)] * v1
+            y[UI(a)] += T[uc, UI(a)] * v0 + T[uc1, UI(a)] * v1
         c += 2
     if c < m:
         vc = v[c]
-        uc = U(c)
+        uc = UI(c)
         for a in range(mp):
-            y[U(a)] += T[uc, U(a)] * vc
+            y[UI(a)] += T[uc, UI(a)] * vc
 
 
 @njit(cache=True, error_model="numpy")
@@ -980,28 +984,28 @@ def band_solve(BINV, BLU, order, b, x, w, v, y):
     nb, m = BINV.shape[0], BINV.shape[1]
     n = nb * m
     lo, up = BLU[0], BLU[1]
-    for k in range(n):
-        w[order[k]] = b[k]
+    for k in range(n):  # unsigned indices: no wrap-around code
+        w[UI(order[UI(k)])] = b[UI(k)]
     for jb in range(nb):
-        base = jb * m
+        base = UI(jb * m)
         if jb > 0:
             for a in range(m):
-                v[a] = w[base + a] - lo[jb, a] * w[base - m + a]
+                v[UI(a)] = w[base + UI(a)] - lo[UI(jb), UI(a)] * w[base - UI(m) + UI(a)]
         else:
             for a in range(m):
-                v[a] = w[base + a]
+                v[UI(a)] = w[base + UI(a)]
         _block_matvec(BINV[jb], v, y)
         for a in range(m):
-            w[base + a] = y[a]
+            w[base + UI(a)] = y[UI(a)]
     for jb in range(nb - 2, -1, -1):
-        base = jb * m
+        base = UI(jb * m)
         for c in range(m):
-            v[c] = up[jb, c] * w[base + m + c]
+            v[UI(c)] = up[UI(jb), UI(c)] * w[base + UI(m) + UI(c)]
         _block_matvec(BINV[jb], v, y)
         for a in range(m):
-            w[base + a] -= y[a]
+            w[base + UI(a)] -= y[UI(a)]
     for k in range(n):
-        x[k] = w[order[k]]
+        x[UI(k)] = w[UI(order[UI(k)])]
 
 
 # ---------------------------------------------------------------------------- multigrid-preconditioned GMRES

@@ -569,7 +569,7 @@ def _face_fluxes(W, C, F, K, idt, ih, area):
     has_outflow = False
     da, db = face_axis(P, K)
     n1, n2 = kind.shape[0], kind.shape[1]
-    for i_ in range(n1):  # unsigned indices: no wrap-around code (module docstring)
+    for i_ in range(n1):  # unsigned indices (``UI``): no wrap-around code
         i = UI(i_)
         for j_ in range(n2):
             j = UI(j_)

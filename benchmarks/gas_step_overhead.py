@@ -16,6 +16,7 @@ import time
 from collections import defaultdict
 
 import fluidem as fd
+from fluidem.bench import _wrap
 from fluidem.coupling import _paired_kernels as P
 from fluidem.coupling import _voidage_kernels as VK
 from fluidem.gas import _solver_kernels as K
@@ -24,27 +25,14 @@ COMPILED = ((K, "start_step"), (K, "iterate"), (K, "end_step"), (P, "deposit"), 
             (VK, "map_solids"))
 
 
-def _time_calls(acc):
-    for mod, name in COMPILED:
-        fn = getattr(mod, name)
-
-        def timed(*args, _fn=fn):
-            t0 = time.perf_counter()
-            try:
-                return _fn(*args)
-            finally:
-                acc["compiled"] += time.perf_counter() - t0
-
-        setattr(mod, name, timed)
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("checkpoint", help="restart.h5 of a tsuji-jet run")
     ap.add_argument("--profile", action="store_true")
     args = ap.parse_args()
-    acc = defaultdict(float)
-    _time_calls(acc)
+    acc, calls = defaultdict(float), defaultdict(int)
+    for mod, name in COMPILED:  # the module attributes the coupling calls them through
+        _wrap(mod, name, "compiled", acc, calls)
     sim = fd.Simulation(fd.load_case("tsuji-jet"))
     sim.load_checkpoint(args.checkpoint)
     gas = sim.gas

@@ -895,9 +895,11 @@ def _invert_in_place(A, rows):
 
 
 @njit(cache=True, error_model="numpy")
-def band_factor(data, indices, indptr, order, BINV, BLU, rows, j0):
+def band_factor(data, indices, indptr, place, BINV, BLU, rows, j0):
     """Block-tridiagonal LU (see above) of the CSC matrix (data, indices, indptr) with rows and
-    columns renumbered by ``order``, from block ``j0`` on (the blocks before it keep their
+    columns renumbered by the band numbering ``order`` of ``band_solve``, given as ``place`` (2, n) int64:
+    order // m and order % m (the block of each unknown and its place in it, made once by ``GasSolver``),
+    from block ``j0`` on (the blocks before it keep their
     factors: the recursion runs in block order); ``row`` is work (≥ m). Without pivoting, as the
     pressure matrix is diagonally dominant; returns the smallest |pivot| relative to the largest
     |diagonal| so that the caller can check (0 when the matrix is not block tridiagonal in this
@@ -911,13 +913,8 @@ def band_factor(data, indices, indptr, order, BINV, BLU, rows, j0):
             up[jb, a] = 0.0
             for b in range(BINV.shape[2]):  # with the padding columns (``_invert_in_place``)
                 BINV[jb, a, b] = 0.0
-    # block and place in it of each unknown, one integer division each (a division per matrix entry
-    # took 33 µs of a tsuji-jet factorisation)
-    blk = np.empty(n, dtype=np.int64)
-    at = np.empty(n, dtype=np.int64)
-    for k in range(n):
-        blk[k] = order[k] // m
-        at[k] = order[k] - blk[k] * m
+    blk, at = place[0], place[1]  # block of each unknown and its place in it (a division per matrix entry
+    # here took 33 µs of a tsuji-jet factorisation)
     for col in range(n):
         jc = blk[col]
         ic = at[col]
@@ -1298,7 +1295,7 @@ def gmres(MGL, MGI, MGA, MGW, DLU, PIV, KRY, HES, b, x, target, max_iter):
 # ---------------------------------------------------------------------------- the iterations of a step
 @njit(cache=True, error_model="numpy")
 def iterate(U, V, C, FU, FV, KU, KV, row_of, flags, RULES, VEC, MAT, diag_pos, upos, vpos, pin_pos,
-            LUI, Li, Lx, Ui, Ux, Ud, BAND, BLU, order, csc_indices, csc_indptr, csc_block, csc_ell,
+            LUI, Li, Lx, Ui, Ux, Ud, BAND, BLU, order, band_place, csc_indices, csc_indptr, csc_block, csc_ell,
             MGL, MGI, MGA, MGW, DLU, PIV, KRY, HES, fpar, ipar, out):
     """Pressure-correction (Newton) iterations of one time step until the mass residual is below
     ``fpar[F_TOL]``.
@@ -1372,7 +1369,7 @@ def iterate(U, V, C, FU, FV, KU, KV, row_of, flags, RULES, VEC, MAT, diag_pos, u
                 need = True
             if need:
                 ipar[I_REFACTORED] = 1
-                if solver == SOLVER_BAND and band_factor(data, csc_indices, csc_indptr, order, BAND, BLU,
+                if solver == SOLVER_BAND and band_factor(data, csc_indices, csc_indptr, band_place, BAND, BLU,
                                                          VEC[V_ROW:V_ROW + 2], j0) > 1e-12:
                     for k in range(data.size):
                         if csc_block[k] >= j0:

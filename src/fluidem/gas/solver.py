@@ -326,7 +326,7 @@ class GasSolver:
         """The arguments of ``K.iterate``, all persistent arrays (the SuperLU factors change in ``_factorise``)."""
         self._iterate_args = (self.U, self.V, self.C, self.FU, self.FV, self.KU, self.KV, self.row_of, self.flags,
                               self.RULES, self.VEC, self.MAT, self.diag_pos, self.upos, self.vpos, self.pin_pos,
-                              *self._factors, self._band, self._band_lu, self._order, self._csc_indices,
+                              *self._factors, self._band, self._band_lu, self._order, self._band_place, self._csc_indices,
                               self._csc_indptr, self._csc_block, self._csc_ell, *self._mg, self._fpar, self._ipar,
                               self._out)
 
@@ -515,6 +515,7 @@ class GasSolver:
         self._csc_indices = self._indices.astype(np.int64)
         self._csc_indptr = self._indptr.astype(np.int64)
         self._csc_block = self._order[self._csc_indices] // bw  # band: block of each matrix entry's row
+        self._band_place = np.stack([self._order // bw, self._order % bw])  # band: block and place of each unknown
         self._out = np.zeros(9)
         if solver == SOLVER_PYAMG:
             self._setup_pyamg()

@@ -10,12 +10,18 @@ The per-pair and per-particle loops (``_slab_pairs``, ``_gather_range``) index w
 integers (``U``): with a signed index Numba adds wrap-around code for negative values to every
 ``a[k]``, which LLVM cannot drop in these loops (pair forces, one thread, bitwise the same sums:
 tsuji-jet bed at 1.5 s 139 → 100 µs per step, the 10k 3D bench bed 2.28 → 1.92 ms).
+
+``pair_forces`` runs the contact law vectorised over chunks of contacts (``_contact_chunks``)
+whenever one contact model serves every species pair; the scalar loop here (``_slab_pairs``,
+``scalar_pair_forces``) serves tables that mix models, and is the reference the chunks are
+tested against (tests/verification/test_contact_chunks.py).
 """
 import math
 
 import numpy as np
 from numba import njit, prange
 
+from ._contact_chunks import chunk_run, make_work, table_code
 from ._neighbours_kernels import build_pairs, carry_history, cell_order, contacts_first, renumber_pairs
 from .contact._dispatch import contact_force
 from .contact.base import N_SLOTS
@@ -263,9 +269,30 @@ def _pair_forces_parallel(pos, vel, omega, radius, mass, species, pp, row_start,
                       pp, row_start, partner, slab_start, slab_members, hist, dt, update, sum_f, sum_c)
 
 
+@njit(cache=True, error_model="numpy", parallel=True)
+def _chunk_forces_parallel(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, code, work):
+    """``_pair_forces_parallel`` for the chunked contact law; thread k uses row k of the work arrays."""
+    nthreads = block.shape[0] - 1
+    for phase in range(2):
+        for k in prange(nthreads):
+            chunk_run(block[k] + (block[k] + phase) % 2, block[k + 1], flat, code, state, pp, lists, hist, dt, update,
+                      sum_f, sum_c, work, k)
+
+
+@njit(cache=True, error_model="numpy")
+def _chunk_forces(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, code, work):
+    """The chunked contact law over all slabs: the even ones, then the odd ones (see ``pair_forces``)."""
+    if block.shape[0] > 2:
+        _chunk_forces_parallel(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, code, work)
+        return
+    nslab = lists[2].shape[0] - 1
+    for phase in range(2):
+        chunk_run(phase, nslab, flat, code, state, pp, lists, hist, dt, update, sum_f, sum_c, work, 0)
+
+
 @njit(cache=True, error_model="numpy")
 def pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
-                dt, update, sum_f, sum_c, block, flat=False):
+                dt, update, sum_f, sum_c, block, flat=False, work=None):
     """Add the contact force sums (sum_f) and Σ −n × F_t (sum_c, torque per unit lever arm) per particle.
 
     sum_f and sum_c must be zero on entry (gather_forces leaves them so). Slabs of one parity
@@ -273,7 +300,30 @@ def pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, 
     the threads (``thread_blocks``); with one block the slabs run in the same order without a
     parallel region. Every particle gets its terms in the same order either way (bitwise the same sums).
     ``flat``: a flat 2D bed (``is_flat``; ``_slab_pairs_flat``), whose sum_f z and sum_c x, y are left as they are.
+
+    When every species pair uses one contact model that has a chunk law (``_contact_chunks``), the law runs
+    vectorised over chunks of contacts, with the work arrays ``work`` (``_contact_chunks.make_work`` for
+    this list and len(block) − 1 threads; made here if None); otherwise the scalar loop ``_slab_pairs`` runs.
     """
+    code = table_code(pp)
+    if code != 0:
+        state = (pos, vel, omega, radius, mass, species)
+        lists = (row_start, partner, slab_start, slab_members)
+        if work is None:
+            _chunk_forces(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, code,
+                          make_work(pp, row_start, hist, slab_start, slab_members, block.shape[0] - 1))
+        else:
+            _chunk_forces(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, code, work)
+        return
+    scalar_pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members,
+                       hist, dt, update, sum_f, sum_c, block, flat)
+
+
+@njit(cache=True, error_model="numpy")
+def scalar_pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members,
+                       hist, dt, update, sum_f, sum_c, block, flat=False):
+    """``pair_forces`` with the scalar loop ``_slab_pairs`` for any contact table (one contact at a time, the
+    owner's sums kept in registers over its row)."""
     if block.shape[0] > 2:
         _pair_forces_parallel(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start,
                               slab_members, hist, dt, update, sum_f, sum_c, block, flat)
@@ -802,6 +852,7 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
     moved = _kick_drift(pos, vel, omega, force, torque, inv_mass, inv_inertia, dt, ref_pos, limit2)
     block = thread_blocks(row_start, slab_start, slab_members, nthreads)
     first = slab_start[block]
+    work = make_work(pp, row_start, hist, slab_start, slab_members, nthreads)
     # a flat 2D bed stays flat: in 2D gather_forces zeroes F_z and T_x, T_y at every step
     flat = dim2 and is_flat(pos, vel, omega, hist)
     for s in range(nsteps):
@@ -818,11 +869,12 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
                 pos, radius, skin, dim2, row_start, partner, hist, ref_pos)
             block = thread_blocks(row_start, slab_start, slab_members, nthreads)
             first = slab_start[block]
+            work = make_work(pp, row_start, hist, slab_start, slab_members, nthreads)
             near_walls(ref_pos, radius, wall_motion, wall_point0, wall_normal, skin, dim2, wall_hist, wall_touch,
                        near_count, near_wall, first)
             rebuilds += 1
         pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
-                    dt, True, sum_f, sum_c, block, flat)
+                    dt, True, sum_f, sum_c, block, flat, work)
         mode = 2 if s < nsteps - 1 else 1
         moved = gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
                               wall_axis, wall_hist, wall_touch, near_count, near_wall, gravity, ext_force, ext_damping,

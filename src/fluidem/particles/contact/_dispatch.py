@@ -4,12 +4,21 @@
 model's coefficients: normal spring + dashpot (Sun 2007 eq. 21), tangential
 spring + dashpot with history (eqs 19–20, 22) truncated at the Coulomb limit.
 Adding a model adds one branch to ``coefficients``.
+
+``contact_force`` is written without data-dependent branches: the rescaling of the
+rotated spring, the Coulomb truncation and the spring reset on slip are computed for
+every contact and chosen by conditional expressions (selects). The values are those
+of the branchy form (a factor 1.0 where it does nothing), and the same code then
+serves the scalar loops and the vectorised contact chunks (``_contact_chunks``), where
+LLVM turns each select into a blend across four contacts.
 """
 import math
 
 from numba import njit
 
 from . import hertz_mindlin, spring_dashpot
+
+TINY = 1e-300  # guards a division whose result a select then drops (no inf or NaN is formed)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -59,33 +68,30 @@ def contact_force(p, overlap, nx, ny, nz, vx, vy, vz, wx, wy, wz, m_eff, r_eff, 
     hy -= hn * ny
     hz -= hn * nz
     h2p = hx * hx + hy * hy + hz * hz
-    if h2p > 0.0:
-        s = math.sqrt(h2 / h2p)
-        hx *= s
-        hy *= s
-        hz *= s
-    if update:
-        hx += tx * dt
-        hy += ty * dt
-        hz += tz * dt
+    s = math.sqrt(h2 / max(h2p, TINY))
+    s = s if h2p > 0.0 else 1.0
+    du = dt if update else 0.0
+    hx = hx * s + tx * du
+    hy = hy * s + ty * du
+    hz = hz * s + tz * du
     ftx = -k_t * hx - eta_t * tx  # Sun 2007 eq. 22
     fty = -k_t * hy - eta_t * ty
     ftz = -k_t * hz - eta_t * tz
-    ft = math.sqrt(ftx * ftx + fty * fty + ftz * ftz)
+    # Coulomb limit: on slip the force is scaled to mu |F_n| and the spring reset to match it
+    ft2 = ftx * ftx + fty * fty + ftz * ftz
     flim = p[7] * max(fn, 0.0)
-    if ft > flim:
-        # slip: Coulomb limit; the spring is reset to match the limited force
-        if ft > 0.0:
-            s = flim / ft
-            ftx *= s
-            fty *= s
-            ftz *= s
-        if k_t > 0.0:
-            hx = -(ftx + eta_t * tx) / k_t
-            hy = -(fty + eta_t * ty) / k_t
-            hz = -(ftz + eta_t * tz) / k_t
-        else:
-            hx = 0.0
-            hy = 0.0
-            hz = 0.0
+    slip = ft2 > flim * flim
+    s = flim / math.sqrt(max(ft2, TINY))
+    s = s if slip else 1.0
+    ftx *= s
+    fty *= s
+    ftz *= s
+    kt = max(k_t, TINY)
+    keep = 1.0 if k_t > 0.0 else 0.0  # a spring without stiffness holds nothing
+    gx = -(ftx + eta_t * tx) / kt * keep
+    gy = -(fty + eta_t * ty) / kt * keep
+    gz = -(ftz + eta_t * tz) / kt * keep
+    hx = gx if slip else hx
+    hy = gy if slip else hy
+    hz = gz if slip else hz
     return fn, ftx, fty, ftz, hx, hy, hz

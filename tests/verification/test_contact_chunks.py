@@ -1,0 +1,193 @@
+"""The chunked, vectorised contact law (``_contact_chunks``) against the scalar pair loop (``_slab_pairs``).
+
+Both evaluate ``contact/_dispatch.contact_force`` for every touching listed pair; the chunked
+path filters the touching pairs, copies them into chunks and adds each contact's force to both
+particles' sums, the scalar loop sums a row in registers first. So their sums must agree to
+round-off, for every contact model, in 3D and on flat 2D beds, with one contact row for all
+species pairs (copied into the chunks once) or several (gathered per contact), with contacts
+that stick and contacts that slip, and with springs of pairs that no longer touch reset to zero.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from numba import njit
+
+from fluidem.particles import _contact_chunks as C
+from fluidem.particles import _softsphere_kernels as K
+from fluidem.particles._neighbours_kernels import build_pairs
+from fluidem.particles.contact import contact_models, soft_contact_models
+from fluidem.particles.contact._dispatch import contact_force
+
+D = 4e-3  # [m] mean diameter
+RHO = (2700.0, 8900.0)  # [kg/m³] two species: aluminium and bronze
+
+
+def law(model, **kw):
+    cls = contact_models.get(model)
+    base = {"linear_spring_dashpot": {"stiffness": 800.0}, "hertz_mindlin": {"youngs_modulus": 5e6}}[model]
+    return cls(**{**base, **kw})
+
+
+def table(model, mixed):
+    """(S, S, 8) contact table: one species, or two whose pairs differ in every parameter (symmetric)."""
+    if not mixed:
+        return law(model, restitution=0.7, friction=0.4).pack(None, None)[None, None, :].copy()
+    a, b, ab = (law(model, restitution=e, friction=mu) for e, mu in ((0.7, 0.4), (0.9, 0.2), (0.5, 0.6)))
+    if model == "linear_spring_dashpot":
+        b = law(model, stiffness=1200.0, restitution=0.9, friction=0.2)
+    pp = np.empty((2, 2, 8))
+    pp[0, 0], pp[1, 1] = a.pack(None, None), b.pack(None, None)
+    pp[0, 1] = pp[1, 0] = ab.pack(None, None)
+    return pp
+
+
+def bed(flat, mixed, seed=3):
+    """600 spheres of ±5 % diameter on a jittered lattice of 0.985 d (about six contacts each in 3D, four in
+    2D), moving and spinning at random, springs random on every listed pair (also on those that do not
+    touch: they must be reset). Sliding speeds of ~0.3 m/s make some contacts slip."""
+    rng = np.random.default_rng(seed)
+    n = 600
+    radius = 0.5 * D * rng.uniform(0.95, 1.05, n)
+    species = rng.integers(0, 2, n) if mixed else np.zeros(n, np.int64)
+    mass = np.array(RHO)[species] * 4.0 / 3.0 * np.pi * radius**3
+    if flat:
+        grid = np.stack(np.meshgrid(np.arange(30), np.arange(20), indexing="ij"), -1).reshape(-1, 2)
+        pos = np.zeros((n, 3))
+        pos[:, :2] = (grid + 0.5) * 0.985 * D + rng.uniform(-0.004, 0.004, (n, 2)) * D
+        pos[:, 2] = 0.01
+    else:
+        grid = np.stack(np.meshgrid(np.arange(10), np.arange(10), np.arange(6), indexing="ij"), -1).reshape(-1, 3)
+        pos = (grid + 0.5) * 0.985 * D + rng.uniform(-0.004, 0.004, (n, 3)) * D
+    vel = rng.normal(0.0, 0.3, (n, 3))
+    omega = rng.normal(0.0, 50.0, (n, 3))
+    if flat:
+        vel[:, 2] = 0.0
+        omega[:, :2] = 0.0
+    row_start, partner, slab_start, slab_members = build_pairs(pos, radius, 0.1 * D, flat)
+    hist = rng.normal(0.0, 2e-6, (partner.shape[0], 3))
+    if flat:
+        hist[:, 2] = 0.0
+    return dict(pos=pos, vel=vel, omega=omega, radius=radius, mass=mass, species=species, row_start=row_start,
+                partner=partner, slab_start=slab_start, slab_members=slab_members, hist=hist)
+
+
+def sums(b, pp, flat, chunked, update=True, nthreads=1):
+    f, c, h = np.zeros((600, 3)), np.zeros((600, 3)), b["hist"].copy()
+    block = K.thread_blocks(b["row_start"], b["slab_start"], b["slab_members"], nthreads)
+    args = (b["pos"], b["vel"], b["omega"], b["radius"], b["mass"], b["species"], pp, b["row_start"], b["partner"],
+            b["slab_start"], b["slab_members"], h, 1e-5, update, f, c, block, flat)
+    (K.pair_forces if chunked else K.scalar_pair_forces)(*args)
+    return f, c, h
+
+
+@njit(cache=True)
+def _count_slip(pos, vel, omega, radius, mass, species, pp, row_start, partner, hist, update):
+    """(slipping, sticking) touching pairs under the scalar law (|F_t| at μ F_n, or below it)."""
+    slip, stick = 0, 0
+    for i in range(pos.shape[0]):
+        for p in range(row_start[i], row_start[i + 1]):
+            j = partner[p]
+            r = pos[i] - pos[j]
+            d = np.sqrt(np.sum(r * r))
+            cut = radius[i] + radius[j]
+            if d >= cut:
+                continue
+            n = r / d
+            w = (radius[i] * omega[i] + radius[j] * omega[j]) * d / cut
+            v = vel[i] - vel[j]
+            fn, fx, fy, fz, hx, hy, hz = contact_force(
+                pp[species[i], species[j]], cut - d, n[0], n[1], n[2], v[0], v[1], v[2], w[0], w[1], w[2],
+                mass[i] * mass[j] / (mass[i] + mass[j]), radius[i] * radius[j] / cut, 1e-5,
+                hist[p, 0], hist[p, 1], hist[p, 2], update)
+            ft = np.sqrt(fx * fx + fy * fy + fz * fz)
+            lim = pp[species[i], species[j], 7] * max(fn, 0.0)
+            if abs(ft - lim) <= 1e-12 * lim:
+                slip += 1
+            elif ft < lim:
+                stick += 1
+    return slip, stick
+
+
+def slipping(b, pp, update):
+    return _count_slip(b["pos"], b["vel"], b["omega"], b["radius"], b["mass"], b["species"], pp, b["row_start"],
+                       b["partner"], b["hist"], update)
+
+
+def touching(b):
+    i = np.repeat(np.arange(600), np.diff(b["row_start"]))
+    j = b["partner"]
+    d = np.linalg.norm(b["pos"][i] - b["pos"][j], axis=1)
+    return d < b["radius"][i] + b["radius"][j]
+
+
+@pytest.mark.parametrize("update", [True, False], ids=["update", "no-update"])
+@pytest.mark.parametrize("mixed", [False, True], ids=["one-row", "two-species"])
+@pytest.mark.parametrize("flat", [False, True], ids=["3d", "flat"])
+@pytest.mark.parametrize("model", soft_contact_models())
+def test_chunks_give_the_scalar_sums(model, flat, mixed, update):
+    pp = table(model, mixed)
+    assert C.table_code(pp) == int(pp[0, 0, 0]) != 0
+    b = bed(flat, mixed)
+    touch = touching(b)
+    assert 500 < touch.sum() < touch.size, "contacts and listed pairs that do not touch"
+    scalar, chunked = sums(b, pp, flat, False, update), sums(b, pp, flat, True, update)
+    f, c, h = scalar
+    slip, stick = slipping(b, pp, update)
+    assert slip > 50 and stick > 50, "both branches of the Coulomb limit"
+    assert not h[~touch].any(), "springs of listed pairs that do not touch are reset"
+    for name, a, x in zip(("force sums", "torque sums", "springs"), scalar, chunked):
+        np.testing.assert_allclose(x, a, rtol=0.0, atol=1e-13 * np.abs(a).max(), err_msg=name)
+    if flat:  # what the flat law leaves out stays zero
+        assert not chunked[0][:, 2].any() and not chunked[1][:, :2].any() and not chunked[2][:, 2].any()
+
+
+@pytest.mark.parametrize("model", soft_contact_models())
+def test_any_thread_split_gives_the_same_bits(model):
+    """Each slab's contact list is one thread's, in one order: 2, 3 and 5 blocks give the serial sums exactly."""
+    pp = table(model, True)
+    b = bed(False, True)
+    serial = sums(b, pp, False, True)
+    for nthreads in (2, 3, 5):
+        split = sums(b, pp, False, True, nthreads=nthreads)
+        for a, x in zip(serial, split):
+            np.testing.assert_array_equal(x, a)
+
+
+def test_a_table_of_two_models_takes_the_scalar_loop():
+    """Models differ between species pairs: no chunk law fits all, ``pair_forces`` is the scalar loop's result."""
+    pp = table("hertz_mindlin", True)
+    pp[0, 1] = pp[1, 0] = law("linear_spring_dashpot", restitution=0.5, friction=0.6).pack(None, None)
+    assert C.table_code(pp) == 0
+    b = bed(False, True)
+    for a, x in zip(sums(b, pp, False, False), sums(b, pp, False, True)):
+        np.testing.assert_array_equal(x, a)
+
+
+def test_a_contact_that_ends_resets_its_spring_between_steps():
+    """Within one ``advance`` call the chunk path reads a spring only where the pair touched at the last step
+    (``touch``): a pair that separates has its spring zeroed at the next step, one that never touched keeps
+    its zero."""
+    pp = table("hertz_mindlin", False)
+    b = bed(False, False)
+    t0 = touching(b)
+    block = np.array([0, b["slab_start"].shape[0] - 1])
+    work = C.make_work(pp, b["row_start"], b["hist"], b["slab_start"], b["slab_members"], 1)
+    assert work[4].all(), "every random spring counts as set"
+    f, c, h = np.zeros((600, 3)), np.zeros((600, 3)), b["hist"].copy()
+    args = (b["radius"], b["mass"], b["species"], pp, b["row_start"], b["partner"], b["slab_start"], b["slab_members"])
+    K.pair_forces(b["pos"], b["vel"], b["omega"], *args, h, 1e-5, True, f, c, block, False, work)
+    np.testing.assert_array_equal(work[4].astype(bool), t0)
+    assert h[t0].all(axis=1).any() and not h[~t0].any()
+    # spread the bed by 2 %: some contacts end
+    pos = b["pos"] * 1.02
+    i = np.repeat(np.arange(600), np.diff(b["row_start"]))
+    j = b["partner"]
+    t1 = np.linalg.norm(pos[i] - pos[j], axis=1) < b["radius"][i] + b["radius"][j]
+    assert (t0 & ~t1).sum() > 100
+    f[:] = 0.0
+    c[:] = 0.0
+    K.pair_forces(pos, b["vel"], b["omega"], *args, h, 1e-5, True, f, c, block, False, work)
+    assert not h[~t1].any(), "ended contacts' springs are zero"
+    assert h[t1].any(axis=1).all()
+    np.testing.assert_array_equal(work[4].astype(bool), t1)

@@ -1,7 +1,7 @@
 """Compiled soft-sphere pair forces with the contact law vectorised over contacts (Sun 2007 eqs 17–24).
 
-The scalar pair loop (``_softsphere_kernels._slab_pairs``) evaluates one contact at a time.
-Its Hertz–Mindlin law is a chain of five square roots and five divisions per contact, each
+A scalar pair loop, evaluating one contact at a time (fluidem's until 2026-11-26), is slow for
+a reason that has nothing to do with memory: its Hertz–Mindlin law is a chain of five square roots and five divisions per contact, each
 waiting for the last, and the core cannot start the next contact's chain before the current
 one retires: about 120 cycles a contact (10,000-sphere bench bed, one thread), though the
 divider alone needs 70 of them. Here the same law runs over chunks of contacts laid out
@@ -24,22 +24,24 @@ flight at once. The pairs of one slab go through three passes:
    quantity needed more checks than the vectoriser allows ("too many memory checks"), and
    one buffer for a whole slab (instead of chunks of 128, 23 KB) thrashed the L1 cache.
 
-A chunk's law is specialised at compile time for the contact model (``code``: every
-species pair must use the same law; a mixed table takes the scalar loop) and for flat 2D
-beds (``flat``, see ``is_flat``): the z terms are left out. Measured on the 10,000-sphere
-bench bed, one thread, pair forces alone (``benchmarks/README.md``): see there.
+The law reads each contact's model code from its row of ``G`` like its parameters, so one
+compiled law serves every model and any table of species pairs, models mixed or not:
+``coefficients`` then computes each model's coefficients for all four contacts of an
+instruction and keeps the one of each contact's model (the linear law costs one square
+root). Flat 2D beds (``flat``, see ``_softsphere_kernels.is_flat``) leave the z terms out of
+the filter, gather and scatter; the law computes them, as zeros (one law to compile, not two).
+Measured in ``benchmarks/README.md``.
 
 Each particle's force sum receives its terms in the order of the slab's contact list
 (slabs of one parity in parallel, then the other), whatever the number of threads: the
-sums are bitwise independent of the thread count, as with the scalar loop. They differ
-from the scalar loop's at round-off (that loop sums a row in registers first).
+sums are bitwise independent of the thread count. They equal a contact-by-contact evaluation
+of the law to round-off (tests/verification/test_contact_chunks.py).
 """
 import math
 
 import numpy as np
 from numba import njit
 
-from .contact import hertz_mindlin, spring_dashpot
 from .contact._dispatch import contact_force
 
 U = np.uintp  # unsigned array index (see _softsphere_kernels)
@@ -47,29 +49,12 @@ U = np.uintp  # unsigned array index (see _softsphere_kernels)
 CHUNK = 128  # contacts per chunk: G and O of one chunk (23 KB) stay in the L1 cache
 # rows of G: what the law reads of a contact
 G_RX, G_RY, G_RZ, G_AI, G_AJ, G_MI, G_MJ, G_VX, G_VY, G_VZ, G_OX, G_OY, G_OZ, G_HX, G_HY, G_HZ = range(16)
-G_LAW = 16  # rows G_LAW … G_LAW + 5: slots 1, 2, 3, 4, 5 and 7 of the packed contact row (contact/base.py)
-LAW_SLOTS = (1, 2, 3, 4, 5, 7)
-N_G = G_LAW + 6
+G_LAW = 16  # rows G_LAW … G_LAW + 6: slots 0 (model code), 1, 2, 3, 4, 5 and 7 of the packed contact row
+LAW_SLOTS = (0, 1, 2, 3, 4, 5, 7)  # (contact/base.py; slot 6 is unused)
+N_G = G_LAW + 7
 # rows of O: what the law gives
 O_FX, O_FY, O_FZ, O_CX, O_CY, O_CZ, O_HX, O_HY, O_HZ = range(9)
 N_O = 9
-
-VECTOR_CODES = (spring_dashpot.CODE, hertz_mindlin.CODE)  # models with a compiled chunk law
-
-
-@njit(cache=True, error_model="numpy")
-def table_code(pp):
-    """The model code shared by every species pair of the contact table pp (S, S, 8), or 0 if they differ
-    or the model has no chunk law (the scalar loop then runs)."""
-    code = int(pp[0, 0, 0])
-    for a in range(pp.shape[0]):
-        for b in range(pp.shape[1]):
-            if int(pp[a, b, 0]) != code:
-                return 0
-    if code == spring_dashpot.CODE or code == hertz_mindlin.CODE:
-        return code
-    return 0
-
 
 @njit(cache=True, error_model="numpy")
 def _uniform(pp):
@@ -90,7 +75,8 @@ def make_work(pp, row_start, hist, slab_start, slab_members, nthreads):
     cbuf, ibuf (nthreads, M) uint32: a thread's contact list of one slab (pair slot, owner), M the most
     listed pairs of any slab; G (nthreads, N_G · CHUNK), O (nthreads, N_O · CHUNK): a thread's chunk;
     touch (P,) uint8: 1 where the pair's spring is set (it touched at the last evaluation: a spring is
-    zero otherwise); uniform: one contact row for all species pairs, copied into every G here.
+    zero otherwise); uniform: one contact row for all species pairs, copied into every G here. The z rows
+    of G start at zero and stay so in a flat bed.
     """
     nslab = slab_start.shape[0] - 1
     most = 0
@@ -111,7 +97,7 @@ def make_work(pp, row_start, hist, slab_start, slab_members, nthreads):
     uniform = _uniform(pp)
     if uniform:
         for t in range(nthreads):
-            for q in range(6):
+            for q in range(len(LAW_SLOTS)):
                 v = pp[0, 0, LAW_SLOTS[q]]
                 for c in range(CHUNK):
                     G[t, (G_LAW + q) * CHUNK + c] = v
@@ -178,23 +164,24 @@ def _gather(flat, uniform, c0, n, pos, vel, omega, radius, mass, species, pp, pa
         if not uniform:
             si = U(species[i])
             sj = U(species[j])
-            G[U((G_LAW + 0) * CHUNK) + c] = pp[si, sj, U(1)]
-            G[U((G_LAW + 1) * CHUNK) + c] = pp[si, sj, U(2)]
-            G[U((G_LAW + 2) * CHUNK) + c] = pp[si, sj, U(3)]
-            G[U((G_LAW + 3) * CHUNK) + c] = pp[si, sj, U(4)]
-            G[U((G_LAW + 4) * CHUNK) + c] = pp[si, sj, U(5)]
-            G[U((G_LAW + 5) * CHUNK) + c] = pp[si, sj, U(7)]
+            G[U((G_LAW + 0) * CHUNK) + c] = pp[si, sj, U(0)]
+            G[U((G_LAW + 1) * CHUNK) + c] = pp[si, sj, U(1)]
+            G[U((G_LAW + 2) * CHUNK) + c] = pp[si, sj, U(2)]
+            G[U((G_LAW + 3) * CHUNK) + c] = pp[si, sj, U(3)]
+            G[U((G_LAW + 4) * CHUNK) + c] = pp[si, sj, U(4)]
+            G[U((G_LAW + 5) * CHUNK) + c] = pp[si, sj, U(5)]
+            G[U((G_LAW + 6) * CHUNK) + c] = pp[si, sj, U(7)]
 
 
-@njit(cache=True, error_model="numpy", inline="always")
-def _law_body(flat, code, n, G, O, dt, update):
-    """The contact law of model ``code`` (a constant) for the n contacts of a chunk: G → O. No branch
-    depends on the data, so that the loop is vectorised."""
+@njit(cache=True, error_model="numpy", fastmath=True)
+def _law(n, G, O, dt, update):
+    """The contact law of each of the n contacts of a chunk (its model coded in its row G_LAW): G → O. No
+    branch depends on the data, so that the loop is vectorised; z terms are zeros in a flat bed."""
     for c_ in range(n):
         c = U(c_)
         rx = G[U(G_RX * CHUNK) + c]
         ry = G[U(G_RY * CHUNK) + c]
-        rz = 0.0 if flat else G[U(G_RZ * CHUNK) + c]
+        rz = G[U(G_RZ * CHUNK) + c]
         ai = G[U(G_AI * CHUNK) + c]
         aj = G[U(G_AJ * CHUNK) + c]
         mi = G[U(G_MI * CHUNK) + c]
@@ -207,48 +194,27 @@ def _law_body(flat, code, n, G, O, dt, update):
         cut = ai + aj
         m_eff = mi * mj / (mi + mj)
         r_eff = ai * aj / (ai + aj)
-        # lever arms a r/(a_i + a_j) of both spheres (see _softsphere_kernels._slab_pairs_body)
+        # lever arms a_i r/(a_i + a_j) and a_j r/(a_i + a_j): they meet at one contact point and add up to the
+        # centre distance (Sun 2007 eq. 24 takes r/2 for equal spheres), so friction conserves angular
+        # momentum; the contact-point velocity (eq. 19) uses the same levers
         lever = r / cut
-        wx = 0.0 if flat else G[U(G_OX * CHUNK) + c] * lever
-        wy = 0.0 if flat else G[U(G_OY * CHUNK) + c] * lever
-        wz = G[U(G_OZ * CHUNK) + c] * lever
-        law = (float(code), G[U((G_LAW + 0) * CHUNK) + c], G[U((G_LAW + 1) * CHUNK) + c],
-               G[U((G_LAW + 2) * CHUNK) + c], G[U((G_LAW + 3) * CHUNK) + c], G[U((G_LAW + 4) * CHUNK) + c], 0.0,
-               G[U((G_LAW + 5) * CHUNK) + c])
+        law = (G[U((G_LAW + 0) * CHUNK) + c], G[U((G_LAW + 1) * CHUNK) + c], G[U((G_LAW + 2) * CHUNK) + c],
+               G[U((G_LAW + 3) * CHUNK) + c], G[U((G_LAW + 4) * CHUNK) + c], G[U((G_LAW + 5) * CHUNK) + c], 0.0,
+               G[U((G_LAW + 6) * CHUNK) + c])
         fn, ftx, fty, ftz, hx, hy, hz = contact_force(
-            law, cut - r, nx, ny, nz, G[U(G_VX * CHUNK) + c], G[U(G_VY * CHUNK) + c],
-            0.0 if flat else G[U(G_VZ * CHUNK) + c], wx, wy, wz, m_eff, r_eff, dt,
-            G[U(G_HX * CHUNK) + c], G[U(G_HY * CHUNK) + c], 0.0 if flat else G[U(G_HZ * CHUNK) + c], update)
+            law, cut - r, nx, ny, nz, G[U(G_VX * CHUNK) + c], G[U(G_VY * CHUNK) + c], G[U(G_VZ * CHUNK) + c],
+            G[U(G_OX * CHUNK) + c] * lever, G[U(G_OY * CHUNK) + c] * lever, G[U(G_OZ * CHUNK) + c] * lever,
+            m_eff, r_eff, dt, G[U(G_HX * CHUNK) + c], G[U(G_HY * CHUNK) + c], G[U(G_HZ * CHUNK) + c], update)
+        # force on i; torque per unit lever on both: (−ℓ_i n) × F_t = ℓ_i (−n × F_t) on i, (ℓ_j n) × (−F_t) on j
         O[U(O_FX * CHUNK) + c] = fn * nx + ftx
         O[U(O_FY * CHUNK) + c] = fn * ny + fty
+        O[U(O_FZ * CHUNK) + c] = fn * nz + ftz
+        O[U(O_CX * CHUNK) + c] = -(ny * ftz - nz * fty) * lever
+        O[U(O_CY * CHUNK) + c] = -(nz * ftx - nx * ftz) * lever
         O[U(O_CZ * CHUNK) + c] = -(nx * fty - ny * ftx) * lever
         O[U(O_HX * CHUNK) + c] = hx
         O[U(O_HY * CHUNK) + c] = hy
-        if not flat:
-            O[U(O_FZ * CHUNK) + c] = fn * nz + ftz
-            O[U(O_CX * CHUNK) + c] = -(ny * ftz - nz * fty) * lever
-            O[U(O_CY * CHUNK) + c] = -(nz * ftx - nx * ftz) * lever
-            O[U(O_HZ * CHUNK) + c] = hz
-
-
-@njit(cache=True, error_model="numpy", fastmath=True)
-def _law_linear(n, G, O, dt, update):
-    _law_body(False, spring_dashpot.CODE, n, G, O, dt, update)
-
-
-@njit(cache=True, error_model="numpy", fastmath=True)
-def _law_linear_flat(n, G, O, dt, update):
-    _law_body(True, spring_dashpot.CODE, n, G, O, dt, update)
-
-
-@njit(cache=True, error_model="numpy", fastmath=True)
-def _law_hertz(n, G, O, dt, update):
-    _law_body(False, hertz_mindlin.CODE, n, G, O, dt, update)
-
-
-@njit(cache=True, error_model="numpy", fastmath=True)
-def _law_hertz_flat(n, G, O, dt, update):
-    _law_body(True, hertz_mindlin.CODE, n, G, O, dt, update)
+        O[U(O_HZ * CHUNK) + c] = hz
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -285,7 +251,7 @@ def _scatter(flat, c0, n, partner, hist, sum_f, sum_c, cbuf, ibuf, O):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _slab_body(flat, s, code, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, O, uniform):
+def _slab_body(flat, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, O, uniform):
     """The contacts of slab s: filter, then gather, law and scatter chunk by chunk.
     state: (pos, vel, omega, radius, mass, species); lists: (row_start, partner, slab_start, slab_members)."""
     pos, vel, omega, radius, mass, species = state
@@ -294,33 +260,24 @@ def _slab_body(flat, s, code, state, pp, lists, hist, dt, update, sum_f, sum_c, 
     for c0 in range(0, k, CHUNK):
         n = min(CHUNK, k - c0)
         _gather(flat, uniform, c0, n, pos, vel, omega, radius, mass, species, pp, partner, hist, cbuf, ibuf, G)
-        if code == hertz_mindlin.CODE:
-            if flat:
-                _law_hertz_flat(n, G, O, dt, update)
-            else:
-                _law_hertz(n, G, O, dt, update)
-        else:
-            if flat:
-                _law_linear_flat(n, G, O, dt, update)
-            else:
-                _law_linear(n, G, O, dt, update)
+        _law(n, G, O, dt, update)
         _scatter(flat, c0, n, partner, hist, sum_f, sum_c, cbuf, ibuf, O)
 
 
 @njit(cache=True, error_model="numpy")
-def _slab(s, code, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, O, uniform):
+def _slab(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, O, uniform):
     """``_slab_body`` in 3D."""
-    _slab_body(False, s, code, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, O, uniform)
+    _slab_body(False, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, O, uniform)
 
 
 @njit(cache=True, error_model="numpy")
-def _slab_flat(s, code, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, O, uniform):
+def _slab_flat(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, O, uniform):
     """``_slab_body`` of a flat 2D bed."""
-    _slab_body(True, s, code, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, O, uniform)
+    _slab_body(True, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, O, uniform)
 
 
 @njit(cache=True, error_model="numpy")
-def chunk_run(start, stop, flat, code, state, pp, lists, hist, dt, update, sum_f, sum_c, work, t):
+def chunk_run(start, stop, flat, state, pp, lists, hist, dt, update, sum_f, sum_c, work, t):
     """The contacts of slabs start, start + 2, … below stop (one parity) with thread t's work rows."""
     cbuf, ibuf, G, O, touch, uniform = work
     cb = cbuf[t]
@@ -329,6 +286,6 @@ def chunk_run(start, stop, flat, code, state, pp, lists, hist, dt, update, sum_f
     o = O[t]
     for s in range(start, stop, 2):
         if flat:
-            _slab_flat(s, code, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform)
+            _slab_flat(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform)
         else:
-            _slab(s, code, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform)
+            _slab(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform)

@@ -6,22 +6,19 @@ straight into per-particle sums, slab by slab in two phases (see
 ``_neighbours_kernels``), so there are no write races and the sums do not depend
 on the number of threads.
 
-The per-pair and per-particle loops (``_slab_pairs``, ``_gather_range``) index with unsigned
-integers (``U``): with a signed index Numba adds wrap-around code for negative values to every
-``a[k]``, which LLVM cannot drop in these loops (pair forces, one thread, bitwise the same sums:
-tsuji-jet bed at 1.5 s 139 → 100 µs per step, the 10k 3D bench bed 2.28 → 1.92 ms).
-
-``pair_forces`` runs the contact law vectorised over chunks of contacts (``_contact_chunks``)
-whenever one contact model serves every species pair; the scalar loop here (``_slab_pairs``,
-``scalar_pair_forces``) serves tables that mix models, and is the reference the chunks are
-tested against (tests/verification/test_contact_chunks.py).
+The contact law runs vectorised over chunks of contacts (``_contact_chunks``, called by
+``pair_forces``). The per-particle loops (``_gather_range``) and those of ``_contact_chunks``
+index with unsigned integers (``U``): with a signed index Numba adds wrap-around code for negative
+values to every ``a[k]``, which LLVM cannot drop in these loops (the former scalar pair loop, one
+thread, bitwise the same sums: tsuji-jet bed at 1.5 s 139 → 100 µs per step, the 10k 3D bench bed
+2.28 → 1.92 ms).
 """
 import math
 
 import numpy as np
 from numba import njit, prange
 
-from ._contact_chunks import chunk_run, make_work, table_code
+from ._contact_chunks import chunk_run, make_work
 from ._neighbours_kernels import build_pairs, carry_history, cell_order, contacts_first, renumber_pairs
 from .contact._dispatch import contact_force
 from .contact.base import N_SLOTS
@@ -60,141 +57,11 @@ def _law(table, a, b):
             table[a, b, U(6)], table[a, b, U(7)])
 
 
-@njit(cache=True, error_model="numpy", inline="always")
-def _slab_pairs_body(flat, s, pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members,
-                     hist, dt, update, sum_f, sum_c):
-    """Pairs owned by the particles of slab s, added into the sums.
-
-    ``flat`` (a constant where this body is inlined: ``_slab_pairs`` False, ``_slab_pairs_flat`` True):
-    every particle in one plane z = const, moving in it and spinning about z only, every tangential
-    spring in the plane (``is_flat``; the one-layer 2D beds of the references). The z components are
-    then exact zeros, and the compiler drops them: the same sums with about a third fewer operations.
-
-    One pair (i, j) at list slot p: F on i is +F, on j −F; both get the same −n × F_t times
-    their lever (Sun 2007 eq. 24, see below). The owner's sums are kept in registers over its
-    row and added once. The body is written out here rather than in helpers taking arrays:
-    an inlined helper made Numba copy array references, i.e. an atomic reference-count
-    increment and decrement (two calls) per pair. Compiled outside the parallel loop, which
-    lets LLVM optimise it as plain serial code.
-    """
-    us = U(s)
-    for m in range(slab_start[us], slab_start[us + U(1)]):
-        i = U(slab_members[U(m)])
-        r0 = row_start[i]
-        r1 = row_start[i + U(1)]
-        if r0 == r1:
-            continue
-        xi = pos[i, U(0)]
-        yi = pos[i, U(1)]
-        zi = 0.0 if flat else pos[i, U(2)]
-        ai = radius[i]
-        mi = mass[i]
-        si = U(species[i])
-        vxi = vel[i, U(0)]
-        vyi = vel[i, U(1)]
-        vzi = 0.0 if flat else vel[i, U(2)]
-        oxi = 0.0 if flat else ai * omega[i, U(0)]
-        oyi = 0.0 if flat else ai * omega[i, U(1)]
-        ozi = ai * omega[i, U(2)]
-        fxi = 0.0
-        fyi = 0.0
-        fzi = 0.0
-        cxi = 0.0
-        cyi = 0.0
-        czi = 0.0
-        for p_ in range(r0, r1):
-            p = U(p_)
-            j = U(partner[p])
-            rx = xi - pos[j, U(0)]
-            ry = yi - pos[j, U(1)]
-            rz = 0.0 if flat else zi - pos[j, U(2)]
-            r2 = rx * rx + ry * ry + rz * rz
-            aj = radius[j]
-            cut = ai + aj
-            if r2 >= cut * cut:
-                h0 = hist[p, U(0)]
-                h1 = hist[p, U(1)]
-                h2 = 0.0 if flat else hist[p, U(2)]
-                if (h0 != 0.0) | (h1 != 0.0) | (h2 != 0.0):  # write only when needed (memory traffic)
-                    hist[p, U(0)] = 0.0
-                    hist[p, U(1)] = 0.0
-                    if not flat:
-                        hist[p, U(2)] = 0.0
-                continue
-            r = math.sqrt(r2)
-            inv_r = 1.0 / r
-            nx = rx * inv_r
-            ny = ry * inv_r
-            nz = rz * inv_r
-            mj = mass[j]
-            m_eff = mi * mj / (mi + mj)
-            r_eff = ai * aj / (ai + aj)
-            # lever arms a_i r/(a_i + a_j) and a_j r/(a_i + a_j): they meet at one contact point and add up
-            # to the centre distance (Sun 2007 eq. 24 takes r/2 for equal spheres), so friction conserves
-            # angular momentum; the contact-point velocity (eq. 19) uses the same levers.
-            lever = r / cut
-            wx = 0.0 if flat else (oxi + aj * omega[j, U(0)]) * lever
-            wy = 0.0 if flat else (oyi + aj * omega[j, U(1)]) * lever
-            wz = (ozi + aj * omega[j, U(2)]) * lever
-            fn, ftx, fty, ftz, hx, hy, hz = contact_force(
-                _law(pp, si, U(species[j])), cut - r, nx, ny, nz,
-                vxi - vel[j, U(0)], vyi - vel[j, U(1)], 0.0 if flat else vzi - vel[j, U(2)],
-                wx, wy, wz, m_eff, r_eff, dt, hist[p, U(0)], hist[p, U(1)], 0.0 if flat else hist[p, U(2)], update)
-            hist[p, U(0)] = hx
-            hist[p, U(1)] = hy
-            if not flat:
-                hist[p, U(2)] = hz
-            fx = fn * nx + ftx
-            fy = fn * ny + fty
-            fz = fn * nz + ftz
-            # torque on i: (−ℓ_i n) × F_t = ℓ_i (−n × F_t); on j: (ℓ_j n) × (−F_t) = ℓ_j (−n × F_t),
-            # ℓ = a r/(a_i + a_j); gather_forces multiplies by a_i or a_j
-            cx = -(ny * ftz - nz * fty) * lever
-            cy = -(nz * ftx - nx * ftz) * lever
-            cz = -(nx * fty - ny * ftx) * lever
-            fxi += fx
-            fyi += fy
-            fzi += fz
-            cxi += cx
-            cyi += cy
-            czi += cz
-            sum_f[j, U(0)] -= fx
-            sum_f[j, U(1)] -= fy
-            sum_c[j, U(2)] += cz
-            if not flat:  # flat: exact zeros, and gather_forces zeroes these components in 2D anyway
-                sum_f[j, U(2)] -= fz
-                sum_c[j, U(0)] += cx
-                sum_c[j, U(1)] += cy
-        sum_f[i, U(0)] += fxi
-        sum_f[i, U(1)] += fyi
-        sum_c[i, U(2)] += czi
-        if not flat:
-            sum_f[i, U(2)] += fzi
-            sum_c[i, U(0)] += cxi
-            sum_c[i, U(1)] += cyi
-
-
-@njit(cache=True, error_model="numpy", fastmath=True)
-def _slab_pairs(s, pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
-                dt, update, sum_f, sum_c):
-    """``_slab_pairs_body`` in 3D."""
-    _slab_pairs_body(False, s, pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start,
-                     slab_members, hist, dt, update, sum_f, sum_c)
-
-
-@njit(cache=True, error_model="numpy", fastmath=True)
-def _slab_pairs_flat(s, pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
-                     dt, update, sum_f, sum_c):
-    """``_slab_pairs_body`` of a flat bed (``is_flat``)."""
-    _slab_pairs_body(True, s, pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start,
-                     slab_members, hist, dt, update, sum_f, sum_c)
-
-
 @njit(cache=True, error_model="numpy")
 def is_flat(pos, vel, omega, hist):
     """True if every particle has the same z, v_z = 0, ω_x = ω_y = 0 and every spring h_z = 0 (a flat 2D bed:
-    ``_slab_pairs_flat`` gives the same sums as ``_slab_pairs``). Counts without early exits, which the
-    compiler vectorises (a call per gas step of a coupled run)."""
+    the pair forces and the force pass may leave out the z terms, exact zeros there). Counts without early
+    exits, which the compiler vectorises (a call per gas step of a coupled run)."""
     n = pos.shape[0]
     if n == 0:
         return False
@@ -208,6 +75,7 @@ def is_flat(pos, vel, omega, hist):
 
 
 PAIR_WEIGHT = 1.5  # cost of a listed pair against that of a particle's own pass (gather), for thread_blocks
+# (measured for the former scalar pair loop; the chunked one keeps the 100,000-sphere bed's two blocks within 3 %)
 
 
 @njit(cache=True, error_model="numpy")
@@ -245,49 +113,26 @@ def thread_blocks(row_start, slab_start, slab_members, nthreads):
     return block
 
 
-@njit(cache=True, error_model="numpy")
-def _slab_run(start, stop, flat, pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start,
-              slab_members, hist, dt, update, sum_f, sum_c):
-    """The pairs of slabs start, start + 2, … below stop (one parity), flat or general."""
-    for s in range(start, stop, 2):
-        if flat:
-            _slab_pairs_flat(s, pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start,
-                             slab_members, hist, dt, update, sum_f, sum_c)
-        else:
-            _slab_pairs(s, pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members,
-                        hist, dt, update, sum_f, sum_c)
-
-
 @njit(cache=True, error_model="numpy", parallel=True)
-def _pair_forces_parallel(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members,
-                          hist, dt, update, sum_f, sum_c, block, flat):
-    """Phase 0 runs the even slabs, phase 1 the odd ones; thread k the slabs of its block (``thread_blocks``)."""
+def _chunk_forces_parallel(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, work):
+    """Phase 0 runs the even slabs, phase 1 the odd ones; thread k the slabs of its block (``thread_blocks``),
+    with row k of the work arrays."""
     nthreads = block.shape[0] - 1
     for phase in range(2):
         for k in prange(nthreads):
-            _slab_run(block[k] + (block[k] + phase) % 2, block[k + 1], flat, pos, vel, omega, radius, mass, species,
-                      pp, row_start, partner, slab_start, slab_members, hist, dt, update, sum_f, sum_c)
-
-
-@njit(cache=True, error_model="numpy", parallel=True)
-def _chunk_forces_parallel(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, code, work):
-    """``_pair_forces_parallel`` for the chunked contact law; thread k uses row k of the work arrays."""
-    nthreads = block.shape[0] - 1
-    for phase in range(2):
-        for k in prange(nthreads):
-            chunk_run(block[k] + (block[k] + phase) % 2, block[k + 1], flat, code, state, pp, lists, hist, dt, update,
+            chunk_run(block[k] + (block[k] + phase) % 2, block[k + 1], flat, state, pp, lists, hist, dt, update,
                       sum_f, sum_c, work, k)
 
 
 @njit(cache=True, error_model="numpy")
-def _chunk_forces(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, code, work):
-    """The chunked contact law over all slabs: the even ones, then the odd ones (see ``pair_forces``)."""
+def _chunk_forces(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, work):
+    """The contacts of all slabs: the even ones, then the odd ones (see ``pair_forces``)."""
     if block.shape[0] > 2:
-        _chunk_forces_parallel(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, code, work)
+        _chunk_forces_parallel(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, work)
         return
     nslab = lists[2].shape[0] - 1
     for phase in range(2):
-        chunk_run(phase, nslab, flat, code, state, pp, lists, hist, dt, update, sum_f, sum_c, work, 0)
+        chunk_run(phase, nslab, flat, state, pp, lists, hist, dt, update, sum_f, sum_c, work, 0)
 
 
 @njit(cache=True, error_model="numpy")
@@ -295,42 +140,26 @@ def pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, 
                 dt, update, sum_f, sum_c, block, flat=False, work=None):
     """Add the contact force sums (sum_f) and Σ −n × F_t (sum_c, torque per unit lever arm) per particle.
 
-    sum_f and sum_c must be zero on entry (gather_forces leaves them so). Slabs of one parity
-    run in parallel: the pairs of slab s touch only slabs s and s + 1. ``block``: the slab blocks of
-    the threads (``thread_blocks``); with one block the slabs run in the same order without a
-    parallel region. Every particle gets its terms in the same order either way (bitwise the same sums).
-    ``flat``: a flat 2D bed (``is_flat``; ``_slab_pairs_flat``), whose sum_f z and sum_c x, y are left as they are.
-
-    When every species pair uses one contact model that has a chunk law (``_contact_chunks``), the law runs
-    vectorised over chunks of contacts, with the work arrays ``work`` (``_contact_chunks.make_work`` for
-    this list and len(block) − 1 threads; made here if None); otherwise the scalar loop ``_slab_pairs`` runs.
+    sum_f and sum_c must be zero on entry (gather_forces leaves them so). The contact law runs vectorised
+    over chunks of contacts (``_contact_chunks``). Slabs of one parity run in parallel: the pairs of slab s
+    touch only slabs s and s + 1. ``block``: the slab blocks of the threads (``thread_blocks``); with one
+    block the slabs run in the same order without a parallel region. Every particle gets its terms in the
+    same order either way (bitwise the same sums).
+    ``flat``: a flat 2D bed (``is_flat``), whose sum_f z and sum_c x, y are left as they are.
+    ``work``: ``_contact_chunks.make_work`` for this list and at least len(block) − 1 threads (made here if
+    None or too small).
     """
-    code = table_code(pp)
-    if code != 0:
-        state = (pos, vel, omega, radius, mass, species)
-        lists = (row_start, partner, slab_start, slab_members)
-        if work is None:
-            _chunk_forces(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, code,
-                          make_work(pp, row_start, hist, slab_start, slab_members, block.shape[0] - 1))
-        else:
-            _chunk_forces(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, code, work)
-        return
-    scalar_pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members,
-                       hist, dt, update, sum_f, sum_c, block, flat)
-
-
-@njit(cache=True, error_model="numpy")
-def scalar_pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members,
-                       hist, dt, update, sum_f, sum_c, block, flat=False):
-    """``pair_forces`` with the scalar loop ``_slab_pairs`` for any contact table (one contact at a time, the
-    owner's sums kept in registers over its row)."""
-    if block.shape[0] > 2:
-        _pair_forces_parallel(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start,
-                              slab_members, hist, dt, update, sum_f, sum_c, block, flat)
-        return
-    for phase in range(2):
-        _slab_run(phase, slab_start.shape[0] - 1, flat, pos, vel, omega, radius, mass, species, pp, row_start, partner,
-                  slab_start, slab_members, hist, dt, update, sum_f, sum_c)
+    state = (pos, vel, omega, radius, mass, species)
+    lists = (row_start, partner, slab_start, slab_members)
+    nthreads = block.shape[0] - 1
+    if work is None:
+        _chunk_forces(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat,
+                      make_work(pp, row_start, hist, slab_start, slab_members, nthreads))
+    elif work[0].shape[0] < nthreads:
+        _chunk_forces(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat,
+                      make_work(pp, row_start, hist, slab_start, slab_members, nthreads))
+    else:
+        _chunk_forces(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, work)
 
 
 @njit(cache=True, error_model="numpy")
@@ -412,7 +241,7 @@ def _gather_body(flat, lo, hi, pos, vel, omega, radius, mass, species, pw, walls
 
     ``flat`` (a constant where inlined: ``_gather_range`` False, ``_gather_range_flat`` True): a flat 2D bed
     (``is_flat``, ``dim2``): z positions, v_z, ω_x, ω_y stay as they are (their updates add exact zeros)
-    and sum_f z, sum_c x, y are not read (the flat pair loop leaves them zero).
+    and sum_f z, sum_c x, y are not read (the flat pair forces leave them zero).
     ``walls``: (wall_now, wall_normal, wall_axis, wall_hist, wall_touch, near_count, near_wall) in one tuple, as a
     call of more than 30 arguments is compiled by Python as f(*args), which Numba cannot inline."""
     wall_now, wall_normal, wall_axis, wall_hist, wall_touch, near_count, near_wall = walls
@@ -705,7 +534,7 @@ def gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_
     ``near_count``, ``near_wall``: the walls each particle is checked against (``near_walls``; all walls: ``all_walls``).
     ``first``: the particle ranges of the threads, slab_start[thread_blocks(…)] (0 and N: one thread, no
     parallel region). Each particle's arithmetic is the same on any number of threads.
-    ``flat``: a flat 2D bed (``is_flat`` and ``dim2``), after the flat pair loop (``_gather_body``).
+    ``flat``: a flat 2D bed (``is_flat`` and ``dim2``), after flat pair forces (``_gather_body``).
     """
     wall_now = walls_now(wall_motion, wall_point0, t)
     n = pos.shape[0]
@@ -801,12 +630,16 @@ def compute_forces(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, 
     block = thread_blocks(row_start, slab_start, slab_members, nthreads)
     flat = dim2 and is_flat(pos, vel, omega, hist)
     pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
-                dt, update, sum_f, sum_c, block, flat)
+                dt, update, sum_f, sum_c, block, flat, make_work(pp, row_start, hist, slab_start, slab_members, nthreads))
     near_count, near_wall = all_walls(pos.shape[0], wall_normal.shape[0])
+    # has_ext and mode as run-time values, as advance passes them: a constant argument is a literal type to
+    # Numba, which would compile gather_forces once more for it (and with it all it calls)
+    has_ext = np.any(ext_force != 0.0) or np.any(ext_damping != 0.0)
+    forces_only = np.zeros(1, dtype=np.int64)[0]  # mode 0, an int64 read at run time
     gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
                   wall_axes(wall_normal), wall_hist, touching_walls(wall_hist), near_count, near_wall, gravity, ext_force,
-                  ext_damping, True, dim2, sum_f, sum_c, t, dt, force, torque, mass, mass, 0, pos, 0.0, slab_start[block],
-                  flat)
+                  ext_damping, has_ext, dim2, sum_f, sum_c, t, dt, force, torque, mass, mass, forces_only, pos, 0.0,
+                  slab_start[block], flat)
 
 
 @njit(cache=True, error_model="numpy")
@@ -840,6 +673,7 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
     rebuild; the caller keeps them between calls (made at set-up and after a restore).
     """
     limit2 = (0.5 * skin) ** 2
+    update = nsteps > 0  # a run-time True, as compute_forces passes it (a literal would compile pair_forces twice)
     sum_f = np.zeros_like(force)
     sum_c = np.zeros_like(force)
     rebuilds = 0
@@ -874,7 +708,7 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
                        near_count, near_wall, first)
             rebuilds += 1
         pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
-                    dt, True, sum_f, sum_c, block, flat, work)
+                    dt, update, sum_f, sum_c, block, flat, work)
         mode = 2 if s < nsteps - 1 else 1
         moved = gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
                               wall_axis, wall_hist, wall_touch, near_count, near_wall, gravity, ext_force, ext_damping,

@@ -7,7 +7,6 @@ with ``fluidem run --resume DIR``.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 from pathlib import Path

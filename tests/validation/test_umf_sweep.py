@@ -41,7 +41,6 @@ balance (gas + floor = 0.995 m g), but it keeps the plateau below the 3 % of the
 """
 import math
 
-import numpy as np
 import pytest
 
 from fluidem.analysis.fluidised import minimum_fluidisation, pressure_drop, wen_yu_umf

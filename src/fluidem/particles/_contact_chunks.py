@@ -22,7 +22,7 @@ flight at once. The pairs of one slab go through three passes:
    sums and stores the spring. Rows of one array at constant offsets let LLVM prove that
    ``G`` and ``O`` are two objects, with one run-time overlap check; separate arrays per
    quantity needed more checks than the vectoriser allows ("too many memory checks"), and
-   one buffer for a whole slab (instead of chunks of 128, 23 KB) thrashed the L1 cache.
+   one buffer for a whole slab (instead of chunks of 128) thrashed the L1 cache.
 
 The law reads each contact's model code from its row of ``G`` like its parameters, so one
 compiled law serves every model and any table of species pairs, models mixed or not:
@@ -43,15 +43,15 @@ import numpy as np
 from numba import njit
 
 from .contact._dispatch import contact_force
+from .contact.base import N_SLOTS
 
 U = np.uintp  # unsigned array index (see _softsphere_kernels)
 
-CHUNK = 128  # contacts per chunk: G and O of one chunk (23 KB) stay in the L1 cache
+CHUNK = 128  # contacts per chunk: G and O of one chunk take 34 KB, about the L1 cache (32 and 64 ran as fast)
 # rows of G: what the law reads of a contact
 G_RX, G_RY, G_RZ, G_AI, G_AJ, G_MI, G_MJ, G_VX, G_VY, G_VZ, G_OX, G_OY, G_OZ, G_HX, G_HY, G_HZ = range(16)
-G_LAW = 16  # rows G_LAW … G_LAW + 6: slots 0 (model code), 1, 2, 3, 4, 5 and 7 of the packed contact row
-LAW_SLOTS = (0, 1, 2, 3, 4, 5, 7)  # (contact/base.py; slot 6 is unused)
-N_G = G_LAW + 7
+G_LAW = 16  # rows G_LAW … G_LAW + 7: the 8 slots of the packed contact row (contact/base.py; slot 0 the model code)
+N_G = G_LAW + N_SLOTS
 # rows of O: what the law gives
 O_FX, O_FY, O_FZ, O_CX, O_CY, O_CZ, O_HX, O_HY, O_HZ = range(9)
 N_O = 9
@@ -97,8 +97,8 @@ def make_work(pp, row_start, hist, slab_start, slab_members, nthreads):
     uniform = _uniform(pp)
     if uniform:
         for t in range(nthreads):
-            for q in range(len(LAW_SLOTS)):
-                v = pp[0, 0, LAW_SLOTS[q]]
+            for q in range(N_SLOTS):
+                v = pp[0, 0, q]
                 for c in range(CHUNK):
                     G[t, (G_LAW + q) * CHUNK + c] = v
     return cbuf, ibuf, G, O, touch, uniform
@@ -164,13 +164,8 @@ def _gather(flat, uniform, c0, n, pos, vel, omega, radius, mass, species, pp, pa
         if not uniform:
             si = U(species[i])
             sj = U(species[j])
-            G[U((G_LAW + 0) * CHUNK) + c] = pp[si, sj, U(0)]
-            G[U((G_LAW + 1) * CHUNK) + c] = pp[si, sj, U(1)]
-            G[U((G_LAW + 2) * CHUNK) + c] = pp[si, sj, U(2)]
-            G[U((G_LAW + 3) * CHUNK) + c] = pp[si, sj, U(3)]
-            G[U((G_LAW + 4) * CHUNK) + c] = pp[si, sj, U(4)]
-            G[U((G_LAW + 5) * CHUNK) + c] = pp[si, sj, U(5)]
-            G[U((G_LAW + 6) * CHUNK) + c] = pp[si, sj, U(7)]
+            for q in range(N_SLOTS):
+                G[U((G_LAW + q) * CHUNK) + c] = pp[si, sj, U(q)]
 
 
 @njit(cache=True, error_model="numpy", fastmath=True)
@@ -199,8 +194,8 @@ def _law(n, G, O, dt, update):
         # momentum; the contact-point velocity (eq. 19) uses the same levers
         lever = r / cut
         law = (G[U((G_LAW + 0) * CHUNK) + c], G[U((G_LAW + 1) * CHUNK) + c], G[U((G_LAW + 2) * CHUNK) + c],
-               G[U((G_LAW + 3) * CHUNK) + c], G[U((G_LAW + 4) * CHUNK) + c], G[U((G_LAW + 5) * CHUNK) + c], 0.0,
-               G[U((G_LAW + 6) * CHUNK) + c])
+               G[U((G_LAW + 3) * CHUNK) + c], G[U((G_LAW + 4) * CHUNK) + c], G[U((G_LAW + 5) * CHUNK) + c],
+               G[U((G_LAW + 6) * CHUNK) + c], G[U((G_LAW + 7) * CHUNK) + c])
         fn, ftx, fty, ftz, hx, hy, hz = contact_force(
             law, cut - r, nx, ny, nz, G[U(G_VX * CHUNK) + c], G[U(G_VY * CHUNK) + c], G[U(G_VZ * CHUNK) + c],
             G[U(G_OX * CHUNK) + c] * lever, G[U(G_OY * CHUNK) + c] * lever, G[U(G_OZ * CHUNK) + c] * lever,

@@ -32,7 +32,8 @@ def law(model, **kw):
 
 
 def table(model, mixed):
-    """(S, S, 8) contact table: one species, or two whose pairs differ in every parameter (symmetric)."""
+    """(S, S, 8) contact table: one species, or two whose three pairs differ in restitution and friction (the
+    linear law also in stiffness); symmetric."""
     if not mixed:
         return law(model, restitution=0.7, friction=0.4).pack(None, None)[None, None, :].copy()
     a, b, ab = (law(model, restitution=e, friction=mu) for e, mu in ((0.7, 0.4), (0.9, 0.2), (0.5, 0.6)))
@@ -77,8 +78,8 @@ def bed(flat, mixed, seed=3):
 def sums(b, pp, flat, update=True, nthreads=1):
     f, c, h = np.zeros((600, 3)), np.zeros((600, 3)), b["hist"].copy()
     block = K.thread_blocks(b["row_start"], b["slab_start"], b["slab_members"], nthreads)
-    K.pair_forces(b["pos"], b["vel"], b["omega"], b["radius"], b["mass"], b["species"], pp, b["row_start"], b["partner"],
-                  b["slab_start"], b["slab_members"], h, 1e-5, update, f, c, block, flat)
+    K.pair_forces(b["pos"], b["vel"], b["omega"], b["radius"], b["mass"], b["species"], pp, b["row_start"],
+                  b["partner"], b["slab_start"], b["slab_members"], h, 1e-5, update, f, c, block, flat)
     return f, c, h
 
 

@@ -1,13 +1,14 @@
 """Compiled soft-sphere pair forces with the contact law vectorised over contacts (Sun 2007 eqs 17–24).
 
-A scalar pair loop, evaluating one contact at a time (fluidem's until 2026-11-26), is slow for
-a reason that has nothing to do with memory: its Hertz–Mindlin law is a chain of five square roots and five divisions per contact, each
-waiting for the last, and the core cannot start the next contact's chain before the current
-one retires: about 120 cycles a contact (10,000-sphere bench bed, one thread), though the
-divider alone needs 70 of them. Here the same law runs over chunks of contacts laid out
-side by side, so that LLVM vectorises it: four contacts per AVX2 instruction, a square root
-or a division every ~2 cycles per contact instead of ~9, and the chains of four contacts in
-flight at once. The pairs of one slab go through three passes:
+A scalar pair loop, one contact at a time (fluidem's until 2026-11-26), is slow for a reason
+that has little to do with memory: its Hertz–Mindlin law is a chain of five square roots and
+five divisions per contact, each waiting for the last, and the core cannot start the next
+contact's chain before the current one retires: about 120 cycles a contact (10,000-sphere
+bench bed, one thread; ``llvm-mca -mcpu=znver3``), though the divider alone needs 70 of them.
+Here the same law runs over chunks of contacts laid out side by side, so that LLVM vectorises
+it: four contacts per AVX2 instruction (a square root costs ~1 ns per contact instead of
+~3), and the chains of four contacts in flight at once. The pairs of one slab go through
+three passes:
 
 1. ``_filter``: every listed pair of the slab's members is tested for contact
    (``r² < (a_i + a_j)²``, the scalar loop's test) and the touching ones are appended,
@@ -18,9 +19,9 @@ flight at once. The pairs of one slab go through three passes:
    (centre offset, radii, masses, relative velocity, a_i ω_i + a_j ω_j, spring, the contact
    law's parameters) into rows of one flat array ``G`` (row q of contact c at
    ``G[q * CHUNK + c]``); ``_law`` runs ``contact/_dispatch.contact_force`` (branch-free)
-   over the chunk into ``O``; ``_scatter`` adds each force and torque to both particles'
+   over the chunk into ``out``; ``_scatter`` adds each force and torque to both particles'
    sums and stores the spring. Rows of one array at constant offsets let LLVM prove that
-   ``G`` and ``O`` are two objects, with one run-time overlap check; separate arrays per
+   ``G`` and ``out`` are two objects, with one run-time overlap check; separate arrays per
    quantity needed more checks than the vectoriser allows ("too many memory checks"), and
    one buffer for a whole slab (instead of chunks of 128) thrashed the L1 cache.
 
@@ -47,14 +48,15 @@ from .contact.base import N_SLOTS
 
 U = np.uintp  # unsigned array index (see _softsphere_kernels)
 
-CHUNK = 128  # contacts per chunk: G and O of one chunk take 34 KB, about the L1 cache (32 and 64 ran as fast)
+CHUNK = 128  # contacts per chunk: G and out take 34 KB, about the L1 cache (chunks of 32 and 64 ran as fast)
 # rows of G: what the law reads of a contact
 G_RX, G_RY, G_RZ, G_AI, G_AJ, G_MI, G_MJ, G_VX, G_VY, G_VZ, G_OX, G_OY, G_OZ, G_HX, G_HY, G_HZ = range(16)
 G_LAW = 16  # rows G_LAW … G_LAW + 7: the 8 slots of the packed contact row (contact/base.py; slot 0 the model code)
 N_G = G_LAW + N_SLOTS
-# rows of O: what the law gives
+# rows of out: what the law gives
 O_FX, O_FY, O_FZ, O_CX, O_CY, O_CZ, O_HX, O_HY, O_HZ = range(9)
 N_O = 9
+
 
 @njit(cache=True, error_model="numpy")
 def _uniform(pp):
@@ -70,10 +72,10 @@ def _uniform(pp):
 @njit(cache=True, error_model="numpy")
 def make_work(pp, row_start, hist, slab_start, slab_members, nthreads):
     """Work arrays of the chunked pair forces for the current Verlet list, made at each ``advance`` call and
-    list rebuild: (cbuf, ibuf, G, O, touch, uniform).
+    list rebuild: (cbuf, ibuf, G, out, touch, uniform).
 
     cbuf, ibuf (nthreads, M) uint32: a thread's contact list of one slab (pair slot, owner), M the most
-    listed pairs of any slab; G (nthreads, N_G · CHUNK), O (nthreads, N_O · CHUNK): a thread's chunk;
+    listed pairs of any slab; G (nthreads, N_G · CHUNK), out (nthreads, N_O · CHUNK): a thread's chunk;
     touch (P,) uint8: 1 where the pair's spring is set (it touched at the last evaluation: a spring is
     zero otherwise); uniform: one contact row for all species pairs, copied into every G here. The z rows
     of G start at zero and stay so in a flat bed.
@@ -89,7 +91,7 @@ def make_work(pp, row_start, hist, slab_start, slab_members, nthreads):
     cbuf = np.empty((nthreads, max(most, 1)), dtype=np.uint32)
     ibuf = np.empty((nthreads, max(most, 1)), dtype=np.uint32)
     G = np.zeros((nthreads, N_G * CHUNK))
-    O = np.empty((nthreads, N_O * CHUNK))
+    out = np.empty((nthreads, N_O * CHUNK))
     npair = hist.shape[0]
     touch = np.empty(npair, dtype=np.uint8)
     for p in range(npair):
@@ -101,7 +103,7 @@ def make_work(pp, row_start, hist, slab_start, slab_members, nthreads):
                 v = pp[0, 0, q]
                 for c in range(CHUNK):
                     G[t, (G_LAW + q) * CHUNK + c] = v
-    return cbuf, ibuf, G, O, touch, uniform
+    return cbuf, ibuf, G, out, touch, uniform
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -169,8 +171,8 @@ def _gather(flat, uniform, c0, n, pos, vel, omega, radius, mass, species, pp, pa
 
 
 @njit(cache=True, error_model="numpy", fastmath=True)
-def _law(n, G, O, dt, update):
-    """The contact law of each of the n contacts of a chunk (its model coded in its row G_LAW): G → O. No
+def _law(n, G, out, dt, update):
+    """The contact law of each of the n contacts of a chunk (its model coded in its row G_LAW): G → out. No
     branch depends on the data, so that the loop is vectorised; z terms are zeros in a flat bed."""
     for c_ in range(n):
         c = U(c_)
@@ -201,19 +203,19 @@ def _law(n, G, O, dt, update):
             G[U(G_OX * CHUNK) + c] * lever, G[U(G_OY * CHUNK) + c] * lever, G[U(G_OZ * CHUNK) + c] * lever,
             m_eff, r_eff, dt, G[U(G_HX * CHUNK) + c], G[U(G_HY * CHUNK) + c], G[U(G_HZ * CHUNK) + c], update)
         # force on i; torque per unit lever on both: (−ℓ_i n) × F_t = ℓ_i (−n × F_t) on i, (ℓ_j n) × (−F_t) on j
-        O[U(O_FX * CHUNK) + c] = fn * nx + ftx
-        O[U(O_FY * CHUNK) + c] = fn * ny + fty
-        O[U(O_FZ * CHUNK) + c] = fn * nz + ftz
-        O[U(O_CX * CHUNK) + c] = -(ny * ftz - nz * fty) * lever
-        O[U(O_CY * CHUNK) + c] = -(nz * ftx - nx * ftz) * lever
-        O[U(O_CZ * CHUNK) + c] = -(nx * fty - ny * ftx) * lever
-        O[U(O_HX * CHUNK) + c] = hx
-        O[U(O_HY * CHUNK) + c] = hy
-        O[U(O_HZ * CHUNK) + c] = hz
+        out[U(O_FX * CHUNK) + c] = fn * nx + ftx
+        out[U(O_FY * CHUNK) + c] = fn * ny + fty
+        out[U(O_FZ * CHUNK) + c] = fn * nz + ftz
+        out[U(O_CX * CHUNK) + c] = -(ny * ftz - nz * fty) * lever
+        out[U(O_CY * CHUNK) + c] = -(nz * ftx - nx * ftz) * lever
+        out[U(O_CZ * CHUNK) + c] = -(nx * fty - ny * ftx) * lever
+        out[U(O_HX * CHUNK) + c] = hx
+        out[U(O_HY * CHUNK) + c] = hy
+        out[U(O_HZ * CHUNK) + c] = hz
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _scatter(flat, c0, n, partner, hist, sum_f, sum_c, cbuf, ibuf, O):
+def _scatter(flat, c0, n, partner, hist, sum_f, sum_c, cbuf, ibuf, out):
     """Forces and torques of contacts c0 … c0 + n − 1 into both particles' sums (+F on i, −F on j, the same
     −n × F_t per unit lever on both); springs stored."""
     for c_ in range(n):
@@ -221,32 +223,32 @@ def _scatter(flat, c0, n, partner, hist, sum_f, sum_c, cbuf, ibuf, O):
         p = U(cbuf[U(c0) + c])
         i = U(ibuf[U(c0) + c])
         j = U(partner[p])
-        fx = O[U(O_FX * CHUNK) + c]
-        fy = O[U(O_FY * CHUNK) + c]
-        cz = O[U(O_CZ * CHUNK) + c]
+        fx = out[U(O_FX * CHUNK) + c]
+        fy = out[U(O_FY * CHUNK) + c]
+        cz = out[U(O_CZ * CHUNK) + c]
         sum_f[i, U(0)] += fx
         sum_f[i, U(1)] += fy
         sum_c[i, U(2)] += cz
         sum_f[j, U(0)] -= fx
         sum_f[j, U(1)] -= fy
         sum_c[j, U(2)] += cz
-        hist[p, U(0)] = O[U(O_HX * CHUNK) + c]
-        hist[p, U(1)] = O[U(O_HY * CHUNK) + c]
+        hist[p, U(0)] = out[U(O_HX * CHUNK) + c]
+        hist[p, U(1)] = out[U(O_HY * CHUNK) + c]
         if not flat:
-            fz = O[U(O_FZ * CHUNK) + c]
-            cx = O[U(O_CX * CHUNK) + c]
-            cy = O[U(O_CY * CHUNK) + c]
+            fz = out[U(O_FZ * CHUNK) + c]
+            cx = out[U(O_CX * CHUNK) + c]
+            cy = out[U(O_CY * CHUNK) + c]
             sum_f[i, U(2)] += fz
             sum_c[i, U(0)] += cx
             sum_c[i, U(1)] += cy
             sum_f[j, U(2)] -= fz
             sum_c[j, U(0)] += cx
             sum_c[j, U(1)] += cy
-            hist[p, U(2)] = O[U(O_HZ * CHUNK) + c]
+            hist[p, U(2)] = out[U(O_HZ * CHUNK) + c]
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _slab_body(flat, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, O, uniform):
+def _slab_body(flat, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform):
     """The contacts of slab s: filter, then gather, law and scatter chunk by chunk.
     state: (pos, vel, omega, radius, mass, species); lists: (row_start, partner, slab_start, slab_members)."""
     pos, vel, omega, radius, mass, species = state
@@ -255,30 +257,30 @@ def _slab_body(flat, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch,
     for c0 in range(0, k, CHUNK):
         n = min(CHUNK, k - c0)
         _gather(flat, uniform, c0, n, pos, vel, omega, radius, mass, species, pp, partner, hist, cbuf, ibuf, G)
-        _law(n, G, O, dt, update)
-        _scatter(flat, c0, n, partner, hist, sum_f, sum_c, cbuf, ibuf, O)
+        _law(n, G, out, dt, update)
+        _scatter(flat, c0, n, partner, hist, sum_f, sum_c, cbuf, ibuf, out)
 
 
 @njit(cache=True, error_model="numpy")
-def _slab(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, O, uniform):
+def _slab(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform):
     """``_slab_body`` in 3D."""
-    _slab_body(False, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, O, uniform)
+    _slab_body(False, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform)
 
 
 @njit(cache=True, error_model="numpy")
-def _slab_flat(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, O, uniform):
+def _slab_flat(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform):
     """``_slab_body`` of a flat 2D bed."""
-    _slab_body(True, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, O, uniform)
+    _slab_body(True, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform)
 
 
 @njit(cache=True, error_model="numpy")
 def chunk_run(start, stop, flat, state, pp, lists, hist, dt, update, sum_f, sum_c, work, t):
     """The contacts of slabs start, start + 2, … below stop (one parity) with thread t's work rows."""
-    cbuf, ibuf, G, O, touch, uniform = work
+    cbuf, ibuf, G, out, touch, uniform = work
     cb = cbuf[t]
     ib = ibuf[t]
     g = G[t]
-    o = O[t]
+    o = out[t]
     for s in range(start, stop, 2):
         if flat:
             _slab_flat(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform)

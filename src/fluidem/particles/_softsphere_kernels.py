@@ -6,8 +6,8 @@ straight into per-particle sums, slab by slab in two phases (see
 ``_neighbours_kernels``), so there are no write races and the sums do not depend
 on the number of threads.
 
-The contact law runs vectorised over chunks of contacts (``_contact_chunks``, called by
-``pair_forces``). The per-particle loops (``_gather_range``) and those of ``_contact_chunks``
+The contact law runs vectorised over chunks of contacts (``_pair_kernels``, called by
+``pair_forces``). The per-particle loops (``_gather_range``) and those of ``_pair_kernels``
 index with unsigned integers (``U``): with a signed index Numba adds wrap-around code for negative
 values to every ``a[k]``, which LLVM cannot drop in these loops (the former scalar pair loop, one
 thread, bitwise the same sums: tsuji-jet bed at 1.5 s 139 → 100 µs per step, the 10k 3D bench bed
@@ -18,7 +18,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from ._contact_chunks import chunk_run, make_work
+from ._pair_kernels import chunk_run, make_work
 from ._neighbours_kernels import build_pairs, carry_history, cell_order, contacts_first, renumber_pairs
 from .contact._dispatch import contact_force
 from .contact.base import N_SLOTS
@@ -152,12 +152,12 @@ def pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, 
     """Add the contact force sums (sum_f) and Σ −n × F_t (sum_c, torque per unit lever arm) per particle.
 
     sum_f and sum_c must be zero on entry (gather_forces leaves them so). The contact law runs vectorised
-    over chunks of contacts (``_contact_chunks``). Slabs of one parity run in parallel: the pairs of slab s
+    over chunks of contacts (``_pair_kernels``). Slabs of one parity run in parallel: the pairs of slab s
     touch only slabs s and s + 1. ``block``: the slab blocks of the threads (``thread_blocks``); with one
     block the slabs run in the same order without a parallel region. Every particle gets its terms in the
     same order either way (bitwise the same sums).
     ``flat``: a flat 2D bed (``is_flat``), whose sum_f z and sum_c x, y are left as they are.
-    ``work``: ``_contact_chunks.make_work`` for this list and at least len(block) − 1 threads (made here if
+    ``work``: ``_pair_kernels.make_work`` for this list and at least len(block) − 1 threads (made here if
     None or too small).
     """
     state = (pos, vel, omega, radius, mass, species)

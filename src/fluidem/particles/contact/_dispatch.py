@@ -9,8 +9,9 @@ Adding a model adds one branch to ``coefficients``.
 rotated spring, the Coulomb truncation and the spring reset on slip are computed for
 every contact and chosen by conditional expressions (selects). The values are those
 of the branchy form (a factor 1.0 where it does nothing), and the same code then
-serves the scalar loops and the vectorised contact chunks (``_contact_chunks``), where
-LLVM turns each select into a blend across four contacts.
+serves the scalar wall contacts and the pair forces vectorised over chunks of
+contacts (``_pair_kernels``), where LLVM turns each select into a blend across four
+contacts.
 """
 import math
 

@@ -36,7 +36,7 @@ Measured in ``benchmarks/README.md``.
 Each particle's force sum receives its terms in the order of the slab's contact list
 (slabs of one parity in parallel, then the other), whatever the number of threads: the
 sums are bitwise independent of the thread count. They equal a contact-by-contact evaluation
-of the law to round-off (tests/verification/test_contact_chunks.py).
+of the law to round-off (tests/verification/test_pair_kernels.py).
 """
 import math
 

@@ -1,4 +1,4 @@
-"""The chunked, vectorised pair forces (``_contact_chunks``) against the contact law evaluated pair by pair.
+"""The chunked, vectorised pair forces (``_pair_kernels``) against the contact law evaluated pair by pair.
 
 ``pair_forces`` filters the touching pairs, copies them into chunks, runs the contact law
 (``contact/_dispatch.contact_force``) over a chunk as vector code and adds each contact's force
@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from numba import njit
 
-from fluidem.particles import _contact_chunks as C
+from fluidem.particles import _pair_kernels as C
 from fluidem.particles import _softsphere_kernels as K
 from fluidem.particles._neighbours_kernels import build_pairs
 from fluidem.particles.contact import contact_models, soft_contact_models

@@ -267,6 +267,7 @@ class HardSphereEngine:
         self.nbr_start = np.ascontiguousarray(arrays["engine/nbr_start"], dtype=np.int64)
         self.nbr = np.ascontiguousarray(arrays["engine/nbr"], dtype=np.int32)
         self.up_start, self.up = K.upper_half(self.nbr_start, self.nbr)
+        self._work = None  # its R derives from the former ref_pos (see K.workspace)
         self.counters[K.C_LOGGED] = 0
         self.event_log = np.zeros((0, 5))
         self.dt = float(scalars["dt"])

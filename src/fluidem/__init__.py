@@ -7,7 +7,7 @@ Public surface::
     sim = fd.Simulation(case, out_dir="runs/pour")
     sim.run(until=0.5)
 """
-from ._threads import prefer_openmp
+from ._threads import launch_pool, prefer_openmp
 from .case import Case, load_case
 from .errors import CaseError
 from .schedule import Every, EveryTime
@@ -15,6 +15,7 @@ from .schedule import Every, EveryTime
 __version__ = "0.1.0"
 
 prefer_openmp()
+launch_pool()  # after prefer_openmp: the launch fixes the threading layer
 
 
 def __getattr__(name):

@@ -34,6 +34,21 @@ def prefer_openmp() -> None:
     numba.config.THREADING_LAYER = "omp"
 
 
+def launch_pool() -> None:
+    """Start Numba's thread pool now, if this process has not yet.
+
+    Numba starts it at the first call of a parallel kernel from Python, or at ``get_num_threads`` /
+    ``set_num_threads``, but not when a parallel kernel runs inside another compiled function loaded
+    from the cache: that call then finds no pool and the process crashes (numba issue #8578; seen
+    here as a segmentation fault of a second ``HardSphereEngine`` script, whose list build calls the
+    parallel pair search). The package calls it at import (4 ms), after ``prefer_openmp``: the first
+    launch fixes the threading layer.
+    """
+    import numba
+
+    numba.get_num_threads()
+
+
 def set_threads(n: int | None, n_particles: int | None = None) -> int:
     """Use ``n`` compute threads (None: one per PARTICLES_PER_THREAD particles, at least one, at most all
     cores; all cores when the count is not given); returns the number in use."""

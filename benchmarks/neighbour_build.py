@@ -31,15 +31,52 @@ from numba import njit, prange
 
 import fluidem as fd
 from fluidem.bench import load_bed_engine
-# the cell grid, binning and counting sort of the former build are still the module's (the hard-sphere list's;
-# ``_cell_grid`` rewritten with the same results)
-from fluidem.particles._neighbours_kernels import _cell_grid as _former_cell_grid
-from fluidem.particles._neighbours_kernels import _bin as _former_bin
-from fluidem.particles._neighbours_kernels import _counting_sort as _former_counting_sort
-from fluidem.particles._neighbours_kernels import build_pairs
+from fluidem.particles._neighbours_kernels import _bounds, _grid, build_pairs, max_slabs
 from fluidem.particles.softsphere import SoftSphereEngine
 
 # ---- the former build (git 08d3e90), frozen for the comparison ---------------------------------------------
+
+
+@njit(cache=True, error_model="numpy")
+def _former_counting_sort(key, nkeys):
+    """CSR of the indices grouped by key: (start (nkeys+1,), members (N,)), stable within a key."""
+    n = key.shape[0]
+    start = np.zeros(nkeys + 1, dtype=np.int64)
+    for i in range(n):
+        start[key[i] + 1] += 1
+    for c in range(nkeys):
+        start[c + 1] += start[c]
+    fill = start[:-1].copy()
+    members = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        members[fill[key[i]]] = i
+        fill[key[i]] += 1
+    return start, members
+
+
+@njit(cache=True, error_model="numpy")
+def _former_cell_grid(pos, radius, skin, dim2):
+    """Cell grid of the particles: (lower corner (3,), cells per unit length (3,), cells per axis (3,)), the
+    grid of ``build_pairs`` (until 2026-11-26 in ``_neighbours_kernels``, for the hard-sphere list)."""
+    lo, hi, rmax = _bounds(pos, radius)
+    inv, ncell = _grid(lo, hi, rmax, skin, dim2, pos.shape[0])
+    return lo, inv, ncell
+
+
+@njit(cache=True, error_model="numpy")
+def _former_bin(pos, lo, inv, ncell):
+    """Cell of each particle (x-major: (x ny + y) nz + z) and the CSR of the cells' members."""
+    n = pos.shape[0]
+    cell = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        c = 0
+        for d in range(3):
+            k = int((pos[i, d] - lo[d]) * inv[d])
+            k = max(min(k, ncell[d] - 1), 0)
+            c = c * ncell[d] + k
+        cell[i] = c
+    start, members = _former_counting_sort(cell, ncell[0] * ncell[1] * ncell[2])
+    return cell, start, members
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -148,7 +185,7 @@ def former_build_pairs(pos, radius, skin, dim2, expected=0):
     grow if too small. The result does not depend on the chunking or the thread count.
     """
     n = pos.shape[0]
-    slab, slab_start, slab_members = _former_slabs(pos, radius, skin, dim2, 64)
+    slab, slab_start, slab_members = _former_slabs(pos, radius, skin, dim2, max_slabs(n))  # as build_pairs now
     lo, inv, ncell = _former_cell_grid(pos, radius, skin, dim2)
     cell, start, members = _former_bin(pos, lo, inv, ncell)
     # the most candidates one row can have: the members of its 3 x 3 (x 3) cells

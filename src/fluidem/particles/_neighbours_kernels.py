@@ -104,52 +104,6 @@ def _grid(lo, hi, rmax, skin, dim2, n):
 
 
 @njit(cache=True, error_model="numpy")
-def _cell_grid(pos, radius, skin, dim2):
-    """Cell grid of the particles: (lower corner (3,), cells per unit length (3,), cells per axis (3,)).
-
-    The grid of ``build_pairs``, for the hard-sphere engine's list (``_hardsphere_kernels``)."""
-    lo, hi, rmax = _bounds(pos, radius)
-    inv, ncell = _grid(lo, hi, rmax, skin, dim2, pos.shape[0])
-    return lo, inv, ncell
-
-
-@njit(cache=True, error_model="numpy")
-def _bin(pos, lo, inv, ncell):
-    """Cell of each particle (x-major: (x ny + y) nz + z) and the CSR of the cells' members (hard-sphere list)."""
-    n = pos.shape[0]
-    cell = np.empty(n, dtype=np.int64)
-    for i in range(n):
-        c = 0
-        for d in range(3):
-            k = int((pos[i, d] - lo[d]) * inv[d])
-            if k >= ncell[d]:
-                k = ncell[d] - 1
-            if k < 0:
-                k = 0
-            c = c * ncell[d] + k
-        cell[i] = c
-    start, members = _counting_sort(cell, ncell[0] * ncell[1] * ncell[2])
-    return cell, start, members
-
-
-@njit(cache=True, error_model="numpy")
-def _counting_sort(key, nkeys):
-    """CSR of the indices grouped by key: (start (nkeys+1,), members (N,)), stable within a key."""
-    n = key.shape[0]
-    start = np.zeros(nkeys + 1, dtype=np.int64)
-    for i in range(n):
-        start[key[i] + 1] += 1
-    for c in range(nkeys):
-        start[c + 1] += start[c]
-    fill = start[:-1].copy()
-    members = np.empty(n, dtype=np.int64)
-    for i in range(n):
-        members[fill[key[i]]] = i
-        fill[key[i]] += 1
-    return start, members
-
-
-@njit(cache=True, error_model="numpy")
 def _sort_by_cell(pos, radius, lo, hi, rmax, skin, dim2, max_slabs, inv, ncell):
     """Slabs and cells of the particles, in one pass over them and one scatter.
 

@@ -339,7 +339,7 @@ def max_slabs(n):
     The pair forces run slab by slab (``_pair_kernels``), with a fixed cost per slab, and threads take
     contiguous blocks of slabs (two parities each), so a bed needs enough slabs to share out evenly and
     few enough that each slab's contacts fill the vector chunks. On the 2400-sphere tsuji-jet bed
-    (576 contacts among 3859 listed pairs) the pair phase took 59 µs in 64 slabs and 51 µs in 16 (one
+    (about 590 contacts among 3859 listed pairs) the pair phase took 59 µs in 64 slabs and 51 µs in 16 (one
     thread); the 10,000- and 100,000-sphere beds keep 64. A function of the particle count only, never
     of the thread count: the sums stay bitwise the same for any number of threads.
     """

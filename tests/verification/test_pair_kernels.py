@@ -86,8 +86,8 @@ def sums(b, pp, flat, update=True, nthreads=1):
 def reference(b, pp, update=True):
     """Pair by pair: the force on i and j and −n × F_t per unit lever of every listed pair (zero where it does
     not touch), summed with np.add.at; springs of pairs that do not touch reset."""
-    f, c, h, touch = _pairwise(b["pos"], b["vel"], b["omega"], b["radius"], b["mass"], b["species"], pp,
-                               b["row_start"], b["partner"], b["hist"], update)
+    f, c, h, _, _, _ = _pairwise(b["pos"], b["vel"], b["omega"], b["radius"], b["mass"], b["species"], pp,
+                                 b["row_start"], b["partner"], b["hist"], update)
     i = np.repeat(np.arange(600), np.diff(b["row_start"]))
     j = b["partner"]
     fs, cs = np.zeros((600, 3)), np.zeros((600, 3))
@@ -100,8 +100,10 @@ def reference(b, pp, update=True):
 
 @njit(cache=True)
 def _pairwise(pos, vel, omega, radius, mass, species, pp, row_start, partner, hist, update):
+    """Per listed pair: force on i, −n × F_t per unit lever, new spring, whether it touches, F_n and |F_t|."""
     npair = partner.shape[0]
     f, c, h, touch = np.zeros((npair, 3)), np.zeros((npair, 3)), np.zeros((npair, 3)), np.zeros(npair, np.bool_)
+    fnorm, ftan = np.zeros(npair), np.zeros(npair)
     for i in range(pos.shape[0]):
         for p in range(row_start[i], row_start[i + 1]):
             j = partner[p]
@@ -123,40 +125,19 @@ def _pairwise(pos, vel, omega, radius, mass, species, pp, row_start, partner, hi
             f[p] = fn * n + ft
             c[p] = -np.cross(n, ft) * lever
             h[p] = (hx, hy, hz)
-    return f, c, h, touch
-
-
-@njit(cache=True)
-def _count_slip(pos, vel, omega, radius, mass, species, pp, row_start, partner, hist, update):
-    """(slipping, sticking) touching pairs under the scalar law (|F_t| at μ F_n, or below it)."""
-    slip, stick = 0, 0
-    for i in range(pos.shape[0]):
-        for p in range(row_start[i], row_start[i + 1]):
-            j = partner[p]
-            r = pos[i] - pos[j]
-            d = np.sqrt(np.sum(r * r))
-            cut = radius[i] + radius[j]
-            if d >= cut:
-                continue
-            n = r / d
-            w = (radius[i] * omega[i] + radius[j] * omega[j]) * d / cut
-            v = vel[i] - vel[j]
-            fn, fx, fy, fz, hx, hy, hz = contact_force(
-                pp[species[i], species[j]], cut - d, n[0], n[1], n[2], v[0], v[1], v[2], w[0], w[1], w[2],
-                mass[i] * mass[j] / (mass[i] + mass[j]), radius[i] * radius[j] / cut, 1e-5,
-                hist[p, 0], hist[p, 1], hist[p, 2], update)
-            ft = np.sqrt(fx * fx + fy * fy + fz * fz)
-            lim = pp[species[i], species[j], 7] * max(fn, 0.0)
-            if abs(ft - lim) <= 1e-12 * lim:
-                slip += 1
-            elif ft < lim:
-                stick += 1
-    return slip, stick
+            fnorm[p] = fn
+            ftan[p] = np.sqrt(ftx * ftx + fty * fty + ftz * ftz)
+    return f, c, h, touch, fnorm, ftan
 
 
 def slipping(b, pp, update):
-    return _count_slip(b["pos"], b["vel"], b["omega"], b["radius"], b["mass"], b["species"], pp, b["row_start"],
-                       b["partner"], b["hist"], update)
+    """(slipping, sticking) touching pairs under the scalar law (|F_t| at μ F_n, or below it)."""
+    _, _, _, touch, fn, ft = _pairwise(b["pos"], b["vel"], b["omega"], b["radius"], b["mass"], b["species"], pp,
+                                       b["row_start"], b["partner"], b["hist"], update)
+    i = np.repeat(np.arange(b["pos"].shape[0]), np.diff(b["row_start"]))
+    lim = pp[b["species"][i], b["species"][b["partner"]], 7] * np.maximum(fn, 0.0)
+    at_limit = np.abs(ft - lim) <= 1e-12 * lim
+    return int(np.sum(touch & at_limit)), int(np.sum(touch & ~at_limit & (ft < lim)))
 
 
 def agree(expected, chunked):

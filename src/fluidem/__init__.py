@@ -7,10 +7,14 @@ Public surface::
     sim = fd.Simulation(case, out_dir="runs/pour")
     sim.run(until=0.5)
 """
-from ._threads import launch_pool, prefer_openmp
-from .case import Case, load_case
-from .errors import CaseError
-from .schedule import Every, EveryTime
+from ._numba_cache import install as _install_cache_stamp
+
+_install_cache_stamp()  # before any kernel module is imported: their cache locators are chosen at decoration
+
+from ._threads import launch_pool, prefer_openmp  # noqa: E402
+from .case import Case, load_case  # noqa: E402
+from .errors import CaseError  # noqa: E402
+from .schedule import Every, EveryTime  # noqa: E402
 
 __version__ = "0.1.0"
 

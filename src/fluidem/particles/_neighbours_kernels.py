@@ -347,7 +347,7 @@ def max_slabs(n):
 
 
 @njit(cache=True, error_model="numpy")
-def build_pairs(pos, radius, skin, dim2, expected=0):
+def build_pairs(pos, radius, skin, dim2, expected=0, slabs=0):
     """Half neighbour list (CSR by owner) of all pairs closer than a_i + a_j + skin.
 
     Returns (row_start (N+1,), partner (P,) int32, slab_start (S+1,), slab_members (N,)); each
@@ -356,13 +356,14 @@ def build_pairs(pos, radius, skin, dim2, expected=0):
     and a counting sort makes the CSR (``_csr_of_pairs``); ``expected`` (e.g. the previous
     list's length) sizes the buffers, which grow if too small. The result does not depend
     on the chunking or the thread count: it is the sorted set of pairs. Pairs are packed as
-    owner << 32 | partner, which needs N < 2^31 (as the int32 partners do).
+    owner << 32 | partner, which needs N < 2^31 (as the int32 partners do). ``slabs``: the most slabs
+    (0: ``max_slabs(N)``, what the engine uses; ``benchmarks/pair_phase.py`` times others).
     """
     n = pos.shape[0]
     lo, hi, rmax = _bounds(pos, radius)
     inv, ncell = _grid(lo, hi, rmax, skin, dim2, n)
     slab_start, slab_members, start, xs, key, kmax = _sort_by_cell(pos, radius, lo, hi, rmax, skin, dim2,
-                                                                   max_slabs(n), inv, ncell)
+                                                                   slabs if slabs > 0 else max_slabs(n), inv, ncell)
     # the most pairs one particle can append: 2 + 3 cells (one cell in z) or 2 + 3 + 9 cells of kmax
     room = kmax * (5 if ncell[2] == 1 else 14) + 1
     nchunk = max(1, min(BUILD_CHUNKS, n // 256))

@@ -333,7 +333,8 @@ class Simulation:
                 # Hoomans 1996 eq. 51: relative error of E_kin + E_pot + E_rot + E_dsp
                 out["energy_error_rel"] = abs(h["total_energy_J"] - self.energy0) / abs(self.energy0)
         if self.gas is not None:
-            out.update(gas_dt_s=self.gas.gas_dt, gas_steps=self.gas.gas_steps, dem_substeps=self.gas.substeps)
+            out.update(gas_dt_s=self.gas.gas_dt, gas_steps=self.gas.gas_steps, dem_substeps=self.gas.substeps,
+                       gas_courant_max=self.gas.courant_max)
             out["multicontact_ratio"] = F.multicontact_ratio(F.contact_numbers(eng))
             out["pressure_drop_bed_Pa"] = F.pressure_drop(self.gas.grid, self.gas.state.p,
                                                           self.gas.grid.y_centres[-1] + 0.5 * self.gas.grid.dy)

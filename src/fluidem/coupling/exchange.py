@@ -108,6 +108,7 @@ class GasCoupling:
         smap = self._map()
         self.state = self.solver.initial_state(voidage=smap.voidage, velocity=self.section.initial_velocity)
         self.gas_steps = 0
+        self.courant_max = 0.0  # largest gas Courant number of the run's steps (StepInfo.courant) [-]
         self.last_info = None
         self.last_map = smap
         self.last_beta = None
@@ -230,6 +231,7 @@ class GasCoupling:
         self.last_beta = self._kp_cells / gd.cell_volume if self.exchange == "particle" else self._cell_inputs[0]
         self.last_info = self.solver.advance(self.state, self.gas_dt, t, voidage=smap.voidage, beta=beta,
                                              solids_u=us, solids_v=vs)
+        self.courant_max = max(self.courant_max, self.last_info.courant)
         self.gas_steps += 1
         self._paired_ready = True
         self.set_particle_forces()
@@ -351,11 +353,12 @@ class GasCoupling:
         return out
 
     def checkpoint_scalars(self) -> dict:
-        return {"gas_steps": self.gas_steps}
+        return {"gas_steps": self.gas_steps, "gas_courant_max": self.courant_max}
 
     def restore(self, arrays: dict[str, np.ndarray], scalars: dict) -> None:
         self.state = GasState(**{k: np.ascontiguousarray(arrays[f"gas/{k}"], dtype=float) for k in GAS_KEYS})
         self.gas_steps = int(scalars["gas_steps"])
+        self.courant_max = float(scalars.get("gas_courant_max", 0.0))  # absent from checkpoints before 2026-11-26
         self._set_volumes()  # the restored particles may be numbered otherwise than at construction
         self._paired_ready = False
         if self.exchange == "particle" and "coupling/kp" in arrays:

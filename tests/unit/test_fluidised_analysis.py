@@ -76,6 +76,24 @@ def test_dominant_frequency_of_a_noisy_sine():
     assert math.isnan(F.dominant_frequency(t[:4], s[:4]))
 
 
+def test_spectral_peaks_of_two_tones_give_both_frequencies_and_their_power_ratio():
+    """Two sines of amplitudes 50 and 40 Pa on bins of the Welch spectrum (5 s at 100 Hz: segments of 250
+    samples, 0.4 Hz apart): peaks at 2.0 and 6.0 Hz, the second (0.8)² = 0.64 as high; the mean and weak
+    noise do not count."""
+    rng = np.random.default_rng(1)
+    t = np.arange(0.0, 5.0 + 1e-9, 0.01)
+    s = 2000.0 + 50.0 * np.sin(2 * np.pi * 2.0 * t) + 40.0 * np.sin(2 * np.pi * 6.0 * t + 1.0)
+    s += 2.0 * rng.standard_normal(t.size)
+    peaks, heights = F.spectral_peaks(t, s, count=2)
+    assert peaks == pytest.approx([2.0, 6.0], abs=1e-9)
+    assert heights[0] == 1.0 and heights[1] == pytest.approx(0.64, abs=0.03)
+    # the louder tone second: the order follows
+    peaks, heights = F.spectral_peaks(t, 2000.0 + 30.0 * np.sin(2 * np.pi * 2.0 * t) + 60.0 * np.sin(2 * np.pi * 6.0 * t))
+    assert peaks[:2] == pytest.approx([6.0, 2.0], abs=1e-9) and heights[1] == pytest.approx(0.25, abs=0.02)
+    assert F.spectral_peaks(t[:10], s[:10]) == ([], [])
+    assert F.spectral_peaks(t, np.full(t.size, 5.0)) == ([], [])
+
+
 def test_averaging_window_is_sun_5_to_10_s_or_the_second_half():
     assert F.averaging_window(20.0) == (5.0, 10.0)
     assert F.averaging_window(10.0) == (5.0, 10.0)
@@ -97,6 +115,9 @@ def test_time_averages_from_probes_csv(tmp_path):
     assert out["multicontact_ratio_avg"] is None  # only NaN samples
     assert out["pressure_drop_20cm_avg_Pa"] == pytest.approx(1000.0, abs=0.5)
     assert out["pressure_20cm_dominant_frequency_Hz"] == pytest.approx(3.0, abs=0.2)
+    # Welch bins 0.4 Hz apart: 3 Hz lies between 2.8 and 3.2
+    assert out["pressure_20cm_spectral_peaks_Hz"][0] in (pytest.approx(2.8), pytest.approx(3.2))
+    assert out["pressure_20cm_spectral_peak_heights"][0] == 1.0
     assert F.time_averages(tmp_path / "missing.csv", 1.0) == {}
 
 

@@ -265,6 +265,36 @@ def dominant_frequency(t: np.ndarray, signal: np.ndarray) -> float:
     return float(freq[k])
 
 
+def spectral_peaks(t: np.ndarray, signal: np.ndarray, count: int = 3) -> tuple[list[float], list[float]]:
+    """The ``count`` highest peaks of the signal's Welch spectrum: (frequencies [Hz], heights relative to the
+    highest), highest first; empty lists if the signal is too short.
+
+    Welch's estimate (``scipy.signal.welch``: Hann segments of half the record or 256 samples, whichever is
+    shorter, overlapping by half) averages the periodograms of the segments, so a peak that stands out in
+    one record by chance does not. A fluidised bed's pressure signal often has two modes of like power (the
+    tsuji-jet bed: near 2 and 6 Hz), and which one ``dominant_frequency`` picks then changes from record to
+    record; the second height says how close the call was.
+    """
+    from scipy.signal import find_peaks, welch
+
+    t, s = np.asarray(t, float), np.asarray(signal, float)
+    ok = np.isfinite(s)
+    t, s = t[ok], s[ok]
+    if s.size < 16:
+        return [], []
+    dt = float(np.median(np.diff(t)))
+    if dt <= 0:
+        return [], []
+    tu = np.arange(t[0], t[-1] + 0.5 * dt, dt)  # uniform samples (probe times are, up to round-off)
+    su = np.interp(tu, t, s)
+    freq, power = welch(su - su.mean(), fs=1.0 / dt, nperseg=min(256, su.size // 2))
+    where, _ = find_peaks(np.concatenate(([-np.inf], power[1:], [-np.inf])))  # local maxima, the mean's bin left out
+    if where.size == 0 or power.max() <= 0.0:
+        return [], []
+    top = where[np.argsort(power[where])[::-1][:count]]
+    return [float(freq[k]) for k in top], [float(power[k] / power[top[0]]) for k in top]
+
+
 AVERAGED = {  # probes.csv column → summary key of its time average
     "mean_particle_height_m": "mean_particle_height_avg_m",
     "coordination": "coordination_number_avg",
@@ -276,7 +306,8 @@ AVERAGED = {  # probes.csv column → summary key of its time average
 
 
 def time_averages(probes_csv: str | Path, t_end: float) -> dict:
-    """Summary entries: time averages of the bed probes and the pressure signal's dominant frequency."""
+    """Summary entries: time averages of the bed probes, the pressure signal's dominant frequency (periodogram)
+    and the highest peaks of its Welch spectrum with their relative heights."""
     path = Path(probes_csv)
     if not path.exists():
         return {}
@@ -304,6 +335,9 @@ def time_averages(probes_csv: str | Path, t_end: float) -> dict:
         s = np.array([float(r["pressure_drop_20cm_Pa"]) for r in rows])[sel]
         f = dominant_frequency(t[sel], s)
         out["pressure_20cm_dominant_frequency_Hz"] = f if math.isfinite(f) else None
+        peaks, heights = spectral_peaks(t[sel], s)
+        out["pressure_20cm_spectral_peaks_Hz"] = peaks
+        out["pressure_20cm_spectral_peak_heights"] = heights
     return out
 
 

@@ -244,20 +244,28 @@ def averaging_window(t_end: float, window=SUN_WINDOW) -> tuple[float, float]:
     return 0.5 * t_end, t_end
 
 
-def dominant_frequency(t: np.ndarray, signal: np.ndarray) -> float:
-    """Frequency [Hz] of the largest peak of the power spectrum (mean removed); NaN if too short."""
+def _uniform(t, signal, least: int):
+    """(sample spacing, the finite samples resampled on a uniform grid with the mean removed), or None when
+    fewer than ``least`` are finite (probe times are uniform up to round-off)."""
     t, s = np.asarray(t, float), np.asarray(signal, float)
     ok = np.isfinite(s)
     t, s = t[ok], s[ok]
-    if s.size < 8:
-        return math.nan
+    if s.size < least:
+        return None
     dt = float(np.median(np.diff(t)))
     if dt <= 0:
+        return None
+    su = np.interp(np.arange(t[0], t[-1] + 0.5 * dt, dt), t, s)
+    return dt, su - su.mean()
+
+
+def dominant_frequency(t: np.ndarray, signal: np.ndarray) -> float:
+    """Frequency [Hz] of the largest peak of the power spectrum (mean removed); NaN if too short."""
+    u = _uniform(t, signal, 8)
+    if u is None:
         return math.nan
-    # resample on a uniform grid (probe times are uniform up to round-off)
-    tu = np.arange(t[0], t[-1] + 0.5 * dt, dt)
-    su = np.interp(tu, t, s)
-    spec = np.abs(np.fft.rfft(su - su.mean())) ** 2
+    dt, su = u
+    spec = np.abs(np.fft.rfft(su)) ** 2
     freq = np.fft.rfftfreq(su.size, dt)
     if spec.size < 2:
         return math.nan
@@ -277,17 +285,11 @@ def spectral_peaks(t: np.ndarray, signal: np.ndarray, count: int = 3) -> tuple[l
     """
     from scipy.signal import find_peaks, welch
 
-    t, s = np.asarray(t, float), np.asarray(signal, float)
-    ok = np.isfinite(s)
-    t, s = t[ok], s[ok]
-    if s.size < 16:
+    u = _uniform(t, signal, 16)
+    if u is None:
         return [], []
-    dt = float(np.median(np.diff(t)))
-    if dt <= 0:
-        return [], []
-    tu = np.arange(t[0], t[-1] + 0.5 * dt, dt)  # uniform samples (probe times are, up to round-off)
-    su = np.interp(tu, t, s)
-    freq, power = welch(su - su.mean(), fs=1.0 / dt, nperseg=min(256, su.size // 2))
+    dt, su = u
+    freq, power = welch(su, fs=1.0 / dt, nperseg=min(256, su.size // 2))
     where, _ = find_peaks(np.concatenate(([-np.inf], power[1:], [-np.inf])))  # local maxima, the mean's bin left out
     if where.size == 0 or power.max() <= 0.0:
         return [], []

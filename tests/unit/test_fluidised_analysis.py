@@ -88,7 +88,8 @@ def test_spectral_peaks_of_two_tones_give_both_frequencies_and_their_power_ratio
     assert peaks == pytest.approx([2.0, 6.0], abs=1e-9)
     assert heights[0] == 1.0 and heights[1] == pytest.approx(0.64, abs=0.03)
     # the louder tone second: the order follows
-    peaks, heights = F.spectral_peaks(t, 2000.0 + 30.0 * np.sin(2 * np.pi * 2.0 * t) + 60.0 * np.sin(2 * np.pi * 6.0 * t))
+    louder_second = 2000.0 + 30.0 * np.sin(2 * np.pi * 2.0 * t) + 60.0 * np.sin(2 * np.pi * 6.0 * t)
+    peaks, heights = F.spectral_peaks(t, louder_second)
     assert peaks[:2] == pytest.approx([6.0, 2.0], abs=1e-9) and heights[1] == pytest.approx(0.25, abs=0.02)
     assert F.spectral_peaks(t[:10], s[:10]) == ([], [])
     assert F.spectral_peaks(t, np.full(t.size, 5.0)) == ([], [])

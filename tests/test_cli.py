@@ -300,6 +300,9 @@ def test_summary_json(pour_run):
     assert s["n_particles"] == 500
     assert s["particle_steps_per_s"] > 0
     assert 0.0 < s["packing_fraction"] < 1.0
+    # no gas: the wall time splits into the engine, the writers and the loop's own rest
+    assert s["gas_time_s"] == 0.0 and s["particle_time_s"] > 0.0 and s["output_time_s"] > 0.0
+    assert s["particle_time_s"] + s["output_time_s"] <= s["wall_time_s"]
 
 
 def test_probes_csv(pour_run):

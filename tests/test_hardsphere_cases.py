@@ -57,6 +57,11 @@ def test_coupled_hard_sphere_bed_runs_with_gas(tmp_path):
     assert s["multicontact_ratio"] is None  # hard spheres never rest in contact: the ratio is undefined
     assert "energy_error_rel" not in s  # the gas does work: no closed energy balance
     assert (out / "gas.h5").exists()
+    # where the wall time went: the engine, the gas side of the coupled steps, the writers; the loop's own rest
+    parts = s["particle_time_s"], s["gas_time_s"], s["output_time_s"]
+    assert all(p > 0.0 for p in parts) and sum(parts) <= s["wall_time_s"]
+    assert s["collisions_per_particle_s"] == pytest.approx(s["collisions"] / s["particle_time_s"], rel=1e-12)
+    assert s["collisions_per_particle_s"] > s["collisions_per_s"]
 
 
 T0 = 0.5  # [s] jet onset of the Table 2 cases (tests/validation/test_hoomans1996.py)
@@ -90,8 +95,11 @@ def test_coupled_hard_sphere_run_resumes(stopped_and_resumed):
     its pressure matrix: tests/verification/test_coupled_restart.py)."""
     case = load_case("hoomans-orifice", {"time.end": 0.02, "output.checkpoint_interval": 0.01,
                                          "output.snapshot_interval": 0.01, "output.probe_interval": 0.005})
-    whole, _, again = stopped_and_resumed(case, 0.01)
+    whole, first, again = stopped_and_resumed(case, 0.01)
     assert again.step == whole.step == 200
+    # the time split goes on from the checkpoint: the resumed run's totals include the first part's
+    for k in ("particle_time_s", "gas_time_s", "output_time_s"):
+        assert again.summary()[k] > first.summary()[k] > 0.0
     assert again.engine.collisions == whole.engine.collisions > 0
     np.testing.assert_allclose(again.state.position, whole.state.position, rtol=0, atol=1e-12)
     np.testing.assert_allclose(again.state.velocity, whole.state.velocity, rtol=0, atol=1e-9)

@@ -112,6 +112,8 @@ class Simulation:
         self.progress = Progress(case.output.progress_interval) if progress else None
         self.status = "created"
         self.wall_time = 0.0
+        self.step_seconds = 0.0  # wall time in step_once (particles and gas), summed over runs and resumes
+        self.output_seconds = 0.0  # wall time in the observers (snapshots, gas fields, probes, checkpoints)
         self.particle_steps = 0
         self._summary_extra: dict = {}
         self.startup_s: float | None = None  # process start → first compiled chunk done
@@ -182,10 +184,12 @@ class Simulation:
     # ------------------------------------------------------------ stepping
     def step_once(self, nsteps: int = 1) -> None:
         """Advance ``nsteps`` DEM steps (no observers)."""
+        t0 = _time.perf_counter()
         if self.gas is not None:
             self.gas.advance(nsteps)
         else:
             self.engine.advance(nsteps)
+        self.step_seconds += _time.perf_counter() - t0
         self.particle_steps += nsteps * self.engine.state.n
 
     def run(self, until: float | None = None) -> dict:
@@ -198,8 +202,10 @@ class Simulation:
         wall0 = self.wall_time
         nxt = {k: o.schedule.next_step(self.step, self.dt) for k, o in self.observers.items()}
         if self.step == 0:
+            t0 = _time.perf_counter()
             for obs in self.observers.values():
                 obs(self)
+            self.output_seconds += _time.perf_counter() - t0
         chunk = 64
         self.status = "running"
         self._stop_requested = False
@@ -220,10 +226,12 @@ class Simulation:
                 if spent > 0:
                     chunk = int(min(max(1, n * CHUNK_WALL_SECONDS / spent), 4 * chunk + 1))
                 self.wall_time = wall0 + _time.perf_counter() - self._run_wall_start
+                t0 = _time.perf_counter()
                 for k, obs in self.observers.items():
                     if self.step >= nxt[k]:
                         obs(self)
                         nxt[k] = obs.schedule.next_step(self.step, self.dt)
+                self.output_seconds += _time.perf_counter() - t0
                 if self.progress is not None:
                     self.progress.maybe(self, until)
                 self._check_finite()
@@ -316,6 +324,7 @@ class Simulation:
             "neighbour_rebuilds": eng.rebuilds,
             "threads": self.threads,
             "startup_s": self.startup_s,
+            **self.time_split(),
             "coordination_number": c["coordination"],
             "max_overlap_rel": c["max_overlap_rel"],
             "kinetic_energy_J": e["kinetic_J"],
@@ -327,6 +336,8 @@ class Simulation:
             h = P.collisions(eng)
             out.update(collisions=h["collisions"], wall_collisions=h["wall_collisions"],
                        collisions_per_s=h["collisions"] / self.wall_time if self.wall_time > 0 else None,
+                       collisions_per_particle_s=(h["collisions"] / out["particle_time_s"]
+                                                  if out["particle_time_s"] > 0 else None),
                        collapse_remedy_count=h["remedy_count"],
                        dissipated_energy_J=h["dissipated_normal_J"] + h["dissipated_tangential_J"])
             if self.energy0 and self.gas is None:  # with gas, the gas does work on the particles
@@ -345,6 +356,14 @@ class Simulation:
         out.update(self._summary_extra)
         return out
 
+    def time_split(self) -> dict:
+        """Where the wall time went, summed over the run and its resumes [s]: ``particle_time_s`` in the
+        particle engine's compiled calls, ``gas_time_s`` in the rest of the coupled steps (voidage map,
+        drag, gas solve), ``output_time_s`` in the observers; the rest of ``wall_time_s`` is the loop's own."""
+        engine = self.gas.engine_seconds if self.gas is not None else self.step_seconds
+        return {"particle_time_s": engine, "gas_time_s": self.step_seconds - engine if self.gas is not None else 0.0,
+                "output_time_s": self.output_seconds}
+
     def mean_height(self) -> float:
         g = self.engine.gravity
         gn = np.linalg.norm(g)
@@ -357,7 +376,8 @@ class Simulation:
 
     # ------------------------------------------------------------ checkpoints
     def save_checkpoint(self, path: Path) -> None:
-        scalars = dict(self.engine.checkpoint_scalars(), wall_time=self.wall_time, particle_steps=self.particle_steps)
+        scalars = dict(self.engine.checkpoint_scalars(), wall_time=self.wall_time, particle_steps=self.particle_steps,
+                       step_seconds=self.step_seconds, output_seconds=self.output_seconds)
         if self.energy0 is not None:
             scalars["energy0"] = self.energy0
         arrays = self.engine.checkpoint_arrays()
@@ -375,6 +395,8 @@ class Simulation:
         if self.gas is not None:
             self.gas.restore(arrays, scalars)
         self.wall_time = float(scalars.get("wall_time", 0.0))
+        self.step_seconds = float(scalars.get("step_seconds", 0.0))  # absent from checkpoints before 2026-11-26
+        self.output_seconds = float(scalars.get("output_seconds", 0.0))
         self.particle_steps = int(scalars.get("particle_steps", 0))
         if "energy0" in scalars:
             self.energy0 = float(scalars["energy0"])

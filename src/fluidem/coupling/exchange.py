@@ -41,6 +41,7 @@ them arrays.
 from __future__ import annotations
 
 import math
+import time
 
 import numba
 import numpy as np
@@ -109,6 +110,7 @@ class GasCoupling:
         self.state = self.solver.initial_state(voidage=smap.voidage, velocity=self.section.initial_velocity)
         self.gas_steps = 0
         self.courant_max = 0.0  # largest gas Courant number of the run's steps (StepInfo.courant) [-]
+        self.engine_seconds = 0.0  # wall time in the particle engine's advance calls [s]
         self.last_info = None
         self.last_map = smap
         self.last_beta = None
@@ -340,7 +342,9 @@ class GasCoupling:
                 n = 1
             else:
                 n = min(left, self.substeps - phase)
+            t0 = time.perf_counter()
             eng.advance(n)
+            self.engine_seconds += time.perf_counter() - t0
             left -= n
 
     # ------------------------------------------------------------ checkpoint
@@ -353,12 +357,13 @@ class GasCoupling:
         return out
 
     def checkpoint_scalars(self) -> dict:
-        return {"gas_steps": self.gas_steps, "gas_courant_max": self.courant_max}
+        return {"gas_steps": self.gas_steps, "gas_courant_max": self.courant_max, "engine_seconds": self.engine_seconds}
 
     def restore(self, arrays: dict[str, np.ndarray], scalars: dict) -> None:
         self.state = GasState(**{k: np.ascontiguousarray(arrays[f"gas/{k}"], dtype=float) for k in GAS_KEYS})
         self.gas_steps = int(scalars["gas_steps"])
         self.courant_max = float(scalars.get("gas_courant_max", 0.0))  # absent from checkpoints before 2026-11-26
+        self.engine_seconds = float(scalars.get("engine_seconds", 0.0))
         self._set_volumes()  # the restored particles may be numbered otherwise than at construction
         self._paired_ready = False
         if self.exchange == "particle" and "coupling/kp" in arrays:

@@ -107,6 +107,15 @@ class TableSpec(_Strict):
 Velocity = float | PulseSpec | TableSpec
 
 
+def _fastest(value) -> float:
+    """Largest |velocity| [m/s] a velocity spec takes at any time."""
+    if isinstance(value, PulseSpec):
+        return max(abs(value.pulse), abs(value.otherwise))
+    if isinstance(value, TableSpec):
+        return max(abs(v) for _, v in value.table)
+    return abs(float(value))
+
+
 def _velocity(value):
     return value.build() if isinstance(value, (PulseSpec, TableSpec)) else value
 
@@ -206,6 +215,31 @@ class GasSection(_Strict):
             if (a in periodic) != (b in periodic):
                 raise ValueError(f"sides {a} and {b}: periodic needs both opposite sides periodic")
         return v
+
+    @model_validator(mode="after")
+    def _inflow_courant(self):
+        """The gas step against the fastest inflow: its interstitial velocity must not cross more than the
+        Courant limit of a cell in DT (1 with upwind convection, 0.5 with TVD; ``GasSolver``). Flow inside can
+        be faster still (a jet accelerates through the bed): the run then stops with the Courant number it
+        reached, and summary ``gas_courant_max`` tells how close a finished run came."""
+        limit = 0.5 if self.convection == "tvd" else 1.0
+        for side, spec in self.boundaries.items():
+            if spec.kind != "inflow":
+                continue
+            eps = spec.voidage if spec.voidage is not None else 1.0
+            values = [(spec.interstitial, 1.0), (spec.superficial, eps)]
+            for seg in spec.segments or []:
+                values += [(seg.interstitial, 1.0), (seg.superficial, eps)]
+            speed = max((_fastest(v) / f for v, f in values if v is not None), default=0.0)
+            k = 1 if side in ("bottom", "top") else 0
+            width = self.grid.size[k] / self.grid.cells[k]
+            courant = speed * self.dt / width
+            if courant > limit:
+                raise ValueError(
+                    f"gas.dt = {self.dt:g} s: the {side} inflow's {speed:.4g} m/s (interstitial) crosses "
+                    f"{courant:.3g} cells of {width:g} m in one gas step; the Courant number must stay at most "
+                    f"{limit:g} with convection = {self.convection!r}: use gas.dt <= {limit * width / speed:.3g} s")
+        return self
 
     def build(self, gravity) -> GasSolver:
         """The ``GasSolver`` of this section under ``gravity`` (gx, gy[, 0]) [m/s^2]."""

@@ -112,8 +112,11 @@ class Simulation:
         self.progress = Progress(case.output.progress_interval) if progress else None
         self.status = "created"
         self.wall_time = 0.0
-        self.step_seconds = 0.0  # wall time in step_once (particles and gas), summed over runs and resumes
-        self.output_seconds = 0.0  # wall time in the observers (snapshots, gas fields, probes, checkpoints)
+        # wall time of run() in the particle engine, in the rest of the coupled steps and in the observers [s],
+        # summed over runs and resumes as wall_time is (``time_split``)
+        self.particle_seconds = 0.0
+        self.gas_seconds = 0.0
+        self.output_seconds = 0.0
         self.particle_steps = 0
         self._summary_extra: dict = {}
         self.startup_s: float | None = None  # process start → first compiled chunk done
@@ -184,12 +187,10 @@ class Simulation:
     # ------------------------------------------------------------ stepping
     def step_once(self, nsteps: int = 1) -> None:
         """Advance ``nsteps`` DEM steps (no observers)."""
-        t0 = _time.perf_counter()
         if self.gas is not None:
             self.gas.advance(nsteps)
         else:
             self.engine.advance(nsteps)
-        self.step_seconds += _time.perf_counter() - t0
         self.particle_steps += nsteps * self.engine.state.n
 
     def run(self, until: float | None = None) -> dict:
@@ -216,12 +217,19 @@ class Simulation:
                     raise KeyboardInterrupt
                 stop = min([target, self.step + chunk] + list(nxt.values()))
                 t0 = _time.perf_counter()
+                engine0 = self.gas.engine_seconds if self.gas is not None else 0.0
                 n = stop - self.step
                 self.step_once(n)
                 if self.startup_s is None:
                     self.startup_s = seconds_since_process_start()
                 self._run_particle_steps += n * self.engine.state.n
                 spent = _time.perf_counter() - t0
+                if self.gas is not None:
+                    engine = self.gas.engine_seconds - engine0
+                    self.particle_seconds += engine
+                    self.gas_seconds += spent - engine
+                else:
+                    self.particle_seconds += spent
                 # aim for CHUNK_WALL_SECONDS per compiled call
                 if spent > 0:
                     chunk = int(min(max(1, n * CHUNK_WALL_SECONDS / spent), 4 * chunk + 1))
@@ -360,8 +368,7 @@ class Simulation:
         """Where the wall time went, summed over the run and its resumes [s]: ``particle_time_s`` in the
         particle engine's compiled calls, ``gas_time_s`` in the rest of the coupled steps (voidage map,
         drag, gas solve), ``output_time_s`` in the observers; the rest of ``wall_time_s`` is the loop's own."""
-        engine = self.gas.engine_seconds if self.gas is not None else self.step_seconds
-        return {"particle_time_s": engine, "gas_time_s": self.step_seconds - engine if self.gas is not None else 0.0,
+        return {"particle_time_s": self.particle_seconds, "gas_time_s": self.gas_seconds,
                 "output_time_s": self.output_seconds}
 
     def mean_height(self) -> float:
@@ -377,7 +384,8 @@ class Simulation:
     # ------------------------------------------------------------ checkpoints
     def save_checkpoint(self, path: Path) -> None:
         scalars = dict(self.engine.checkpoint_scalars(), wall_time=self.wall_time, particle_steps=self.particle_steps,
-                       step_seconds=self.step_seconds, output_seconds=self.output_seconds)
+                       particle_seconds=self.particle_seconds, gas_seconds=self.gas_seconds,
+                       output_seconds=self.output_seconds)
         if self.energy0 is not None:
             scalars["energy0"] = self.energy0
         arrays = self.engine.checkpoint_arrays()
@@ -395,8 +403,8 @@ class Simulation:
         if self.gas is not None:
             self.gas.restore(arrays, scalars)
         self.wall_time = float(scalars.get("wall_time", 0.0))
-        self.step_seconds = float(scalars.get("step_seconds", 0.0))  # absent from checkpoints before 2026-11-26
-        self.output_seconds = float(scalars.get("output_seconds", 0.0))
+        for k in ("particle_seconds", "gas_seconds", "output_seconds"):  # absent from checkpoints before 2026-11-26
+            setattr(self, k, float(scalars.get(k, 0.0)))
         self.particle_steps = int(scalars.get("particle_steps", 0))
         if "energy0" in scalars:
             self.energy0 = float(scalars["energy0"])

@@ -110,7 +110,7 @@ class GasCoupling:
         self.state = self.solver.initial_state(voidage=smap.voidage, velocity=self.section.initial_velocity)
         self.gas_steps = 0
         self.courant_max = 0.0  # largest gas Courant number of the run's steps (StepInfo.courant) [-]
-        self.engine_seconds = 0.0  # wall time in the particle engine's advance calls [s]
+        self.engine_seconds = 0.0  # wall time in the particle engine's advance calls of this object [s] (a counter)
         self.last_info = None
         self.last_map = smap
         self.last_beta = None
@@ -357,13 +357,12 @@ class GasCoupling:
         return out
 
     def checkpoint_scalars(self) -> dict:
-        return {"gas_steps": self.gas_steps, "gas_courant_max": self.courant_max, "engine_seconds": self.engine_seconds}
+        return {"gas_steps": self.gas_steps, "gas_courant_max": self.courant_max}
 
     def restore(self, arrays: dict[str, np.ndarray], scalars: dict) -> None:
         self.state = GasState(**{k: np.ascontiguousarray(arrays[f"gas/{k}"], dtype=float) for k in GAS_KEYS})
         self.gas_steps = int(scalars["gas_steps"])
         self.courant_max = float(scalars.get("gas_courant_max", 0.0))  # absent from checkpoints before 2026-11-26
-        self.engine_seconds = float(scalars.get("engine_seconds", 0.0))
         self._set_volumes()  # the restored particles may be numbered otherwise than at construction
         self._paired_ready = False
         if self.exchange == "particle" and "coupling/kp" in arrays:

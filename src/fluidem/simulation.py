@@ -365,7 +365,7 @@ class Simulation:
         return out
 
     def time_split(self) -> dict:
-        """Where the wall time went, summed over the run and its resumes [s]: ``particle_time_s`` in the
+        """Where the wall time of ``run`` went, summed over its calls and resumes [s]: ``particle_time_s`` in the
         particle engine's compiled calls, ``gas_time_s`` in the rest of the coupled steps (voidage map,
         drag, gas solve), ``output_time_s`` in the observers; the rest of ``wall_time_s`` is the loop's own."""
         return {"particle_time_s": self.particle_seconds, "gas_time_s": self.gas_seconds,

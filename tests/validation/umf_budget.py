@@ -57,6 +57,8 @@ def fold_inflow_weights():
     """The ``--fold`` experiment (module docstring): the deposit and force kernels of the "particle" exchange
     see the first solved y-face's gas velocity on the inflow face, and the inflow face's face sums are moved
     onto that face before the gas takes them. For the bottom inflow of this bed only."""
+    import inspect
+
     import fluidem.coupling.exchange as X
 
     deposit, forces = X.P.deposit, X.P.particle_forces_split
@@ -66,22 +68,24 @@ def fold_inflow_weights():
         w[:, 0] = v[:, 1]
         return w
 
+    def call(kernel, a, v="v"):
+        """kernel(*a) with its gas velocity ``v`` folded; returns (result, the arguments by name)."""
+        args = inspect.signature(kernel.py_func).bind(*a).arguments
+        args[v] = folded(args[v])
+        return kernel(*args.values()), args
+
     def deposit_folded(*a):
-        a = list(a)
-        a[6] = folded(a[6])
-        bad = deposit(*a)
-        av, bv, vol, beta_v, solids_v = a[18], a[19], a[21], a[24], a[25]
+        bad, k = call(deposit, a)
+        av, bv, beta_v, solids_v = k["AV"], k["BV"], k["beta_v"], k["sv"]
         av[:, 1] += av[:, 0]
         bv[:, 1] += bv[:, 0]
         av[:, 0] = bv[:, 0] = beta_v[:, 0] = solids_v[:, 0] = 0.0
-        beta_v[:, 1] = av[:, 1] / vol
+        beta_v[:, 1] = av[:, 1] / k["vol"]
         solids_v[:, 1] = np.where(av[:, 1] > 0.0, bv[:, 1] / np.where(av[:, 1] > 0.0, av[:, 1], 1.0), 0.0)
         return bad
 
     def forces_folded(*a):
-        a = list(a)
-        a[5] = folded(a[5])
-        return forces(*a)
+        return call(forces, a)[0]
 
     X.P.deposit, X.P.particle_forces_split = deposit_folded, forces_folded
 

@@ -81,6 +81,10 @@ def test_initial_state_meets_the_boundary_conditions():
     ({"beta": 1.0, "solids_u": np.ones((5, 5))}, "gas solids_u: shape"),
     ({"source_v": np.ones((6, 4))}, "gas source_v: shape"),
     ({"dt": 0.0}, "dt = 0.0: must be > 0"),
+    ({"pressure_voidage": np.ones((6, 4))}, r"pressure_voidage: give a pair"),
+    ({"pressure_voidage": (np.ones((6, 4)), np.ones((6, 4)))}, r"pressure_voidage\[1\]: shape \(6, 4\), expected \(5, 5\)"),
+    ({"pressure_voidage": (np.ones((6, 4)), np.zeros((5, 5)))}, r"pressure_voidage: 25 face values outside \(0, 1\]"),
+    ({"pressure_voidage": (np.full((6, 4), np.nan), np.ones((5, 5)))}, r"24 face values outside \(0, 1\], e.g. nan"),
 ])
 def test_bad_step_input_is_a_case_error(kw, message):
     solver = box()
@@ -140,6 +144,45 @@ def test_pressure_matrix_is_the_exact_jacobian_for_constant_density():
         info = solver.advance(state, 1e-4, k * 1e-4, beta=rng.uniform(100, 1000, GRID.shape),
                               voidage=rng.uniform(0.4, 0.6, GRID.shape))
         assert info.iterations == 1 and info.converged
+
+
+@pytest.mark.parametrize("ideal", [False, True])
+def test_pressure_matrix_stays_the_exact_jacobian_with_a_pressure_voidage(ideal):
+    """A pressure term −ε_p ∇p with ε_p ≠ ε_f: the matrix's D = ε_p / a, so the constant-density gas still
+    needs one correction, and the ideal gas as many as with ε_p = ε_f (4-6 on these random steps)."""
+    counts = []
+    for given in (False, True):
+        bcs = {"left": Wall(), "right": Wall(), "top": PressureOutlet(pressure=101325.0),
+               "bottom": Inflow(superficial=0.5, voidage=0.4)}
+        solver = GasSolver(GRID, GasProperties() if ideal else GasProperties(density=1.2), bcs, jacobian_reuse=0.0)
+        state = solver.initial_state(voidage=0.5)
+        rng = np.random.default_rng(1)
+        counts.append([])
+        for k in range(10):
+            pv = (rng.uniform(0.3, 1.0, GRID.u_shape), rng.uniform(0.3, 1.0, GRID.v_shape))
+            info = solver.advance(state, 1e-4, k * 1e-4, beta=rng.uniform(100, 1000, GRID.shape),
+                                  voidage=rng.uniform(0.4, 0.6, GRID.shape), pressure_voidage=pv if given else None)
+            assert info.converged
+            counts[-1].append(info.iterations)
+    if not ideal:
+        assert counts[1] == [1] * 10
+    assert counts[1] == counts[0]
+
+
+@pytest.mark.parametrize("eps_p", [0.5, 1.0])
+def test_gas_at_rest_balances_its_weight_with_the_pressure_voidage(eps_p):
+    """Closed box, gas at rest of voidage ε = 0.5: ε_p ∂p/∂y = ε ρ g on every face, so the pressure rises
+    downwards by (ε / ε_p) ρ g per metre: ρ g with ε_p = ε (the default), ρ g / 2 with ε_p = 1."""
+    rho, g = 1.2, 9.81
+    bcs = {s: Wall() for s in ("left", "right", "bottom", "top")}
+    solver = GasSolver(GRID, GasProperties(density=rho), bcs, gravity=(0.0, -g))
+    state = solver.initial_state(voidage=0.5, pressure=101325.0)
+    pv = (np.full(GRID.u_shape, eps_p), np.full(GRID.v_shape, eps_p))
+    for k in range(30):
+        solver.advance(state, 1e-3, k * 1e-3, pressure_voidage=pv)
+    slope = -np.diff(state.p, axis=1) / GRID.dy
+    np.testing.assert_allclose(slope, 0.5 / eps_p * rho * g, rtol=1e-8)
+    assert np.abs(state.v).max() < 1e-9
 
 
 def test_step_info_mass_balance_error():

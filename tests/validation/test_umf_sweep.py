@@ -41,6 +41,7 @@ balance (gas + floor = 0.995 m g), but it keeps the plateau below the 3 % of the
 """
 import math
 
+import numpy as np
 import pytest
 
 from fluidem.analysis.fluidised import minimum_fluidisation, pressure_drop, wen_yu_umf
@@ -91,6 +92,9 @@ def sweep():
     result = minimum_fluidisation(u, dp, weight)
     print(f"\nW/A = {weight:.2f} Pa, plateau {result['plateau_Pa']:.2f} Pa, u_mf = {result['umf']:.4f} m/s, "
           f"Wen-Yu {wen_yu_umf(D, RHO_P, RHO, MU, G):.4f} m/s")
+    ua, ra = np.array(u), np.array(dp) / weight
+    print("Δp / (W/A) by superficial velocity: " + ", ".join(
+        f"{lo:.2f}-{lo + 0.05:.2f} m/s {ra[(ua > lo) & (ua <= lo + 0.05)].mean():.3f}" for lo in np.arange(0.0, U_MAX, 0.05)))
     return weight, result
 
 

@@ -8,7 +8,8 @@ weight m g, and the bottom wall's force over m g (sampled every gas step, as the
 load comes in impacts): the last two add up to 1 less the particles' mean acceleration.
 ``--profile`` also prints the gas force over m g in layers of one diameter.
 
-    python tests/validation/umf_budget.py [INFLOW_VOIDAGE] [MOMENTUM_EXCHANGE] [--profile] [--fold] [--centre]
+    python tests/validation/umf_budget.py [INFLOW_VOIDAGE] [MOMENTUM_EXCHANGE] [U] [--profile]
+        [--exchange-faces] [--no-pairing] [--extrapolate] [--wide]
 
 Measured 2026-11-22 (``python tests/validation/umf_budget.py 1.0 particle --profile``: inflow voidage 1,
 0.4 m/s, 0.35-0.65 s): Δp / (W/A) 0.952, gas force 0.933 m g, bottom wall 0.062 m g (touched in 75 %
@@ -18,25 +19,27 @@ interpolated towards the inflow face's slower superficial velocity), 1.12-1.15 a
 (The figures quoted in test_umf_sweep.py took the gas force as the fixed part of the engine's
 external force, without its −K v part at the sub-step's velocity.)
 
-``--fold`` is an experiment, not the model: it wraps the "particle" exchange's kernels so that the
-inflow face's share of each particle's interpolation and deposit weights goes to the first face the
-gas solves (the particles below the first y-face then see the bed's gas velocity, and the gas, not
-the inflow boundary, gives them all their drag: the exchange stays exactly paired). ``--centre``
-measures the pressure drop from the first cell centre instead of extrapolating the pressure to the
-inflow face. Measured 2026-11-26 (thirteenth session), 1.0 particle, Δp / (W/A), gas force / m g,
-floor / m g:
+Options: ``--exchange-faces`` (``coupling.boundary_faces = "exchange"``), ``--no-pairing``
+(``coupling.pressure_pairing = false``), ``--extrapolate`` (the inlet pressure extrapolated from the first
+two rows of centres, the analysis's reading before 2026-11-26), ``--wide`` (the test's own 60 × 10 d bed of
+12,000 spheres instead of the 20 × 5 d one).
 
-    model,      extrapolated to the inflow face: 0.953, 0.934, 0.060 (floor touched in 90 % of the steps)
-    model,      from the first cell centre:      0.835
-    --fold,     extrapolated:                    1.041, 0.984, 0.024 (59 %)
-    --fold,     from the first cell centre:      0.908
+Thirteenth session (2026-11-26), before the change: Δp / (W/A) 0.953, gas force 0.934 m g, floor 0.060 m g
+(model of then: boundary faces exchanged, pressure unpaired, inlet extrapolated). Fourteenth session
+(2026-11-26), ``python tests/validation/umf_budget.py 1.0 particle [options]``, Δp / (W/A), gas force / m g,
+floor / m g (share of gas steps with the floor touched):
 
-So at this resolution (the bed about six cells of 4 d high) the treatment of the half cell above the
-inflow moves the plateau by several per cent either way: the particles there take part of their
-drag from the inflow boundary (the documented behaviour of a face the gas does not solve), so the
-gas pressure does not carry that part of their weight, and how the inlet pressure is read from the
-cell-centre pressures decides the rest. A fold of the inflow weights is the consistent change to
-try in the model, with a matching reading of the inlet pressure.
+    defaults (fold, pairing, inlet = first centres)   0.989, 0.997, 0.017 (47 %)
+    --no-pairing                                      0.920, 0.997, 0.020 (65 %)
+    --exchange-faces                                  0.927, 0.964, 0.041 (61 %)
+    --extrapolate                                     1.135, 0.997, 0.017 (47 %)
+    inflow voidage 0.4 (``0.4 particle``)             0.988, 0.998, 0.013 (67 %)
+    --wide --profile                                  0.984, 0.994, 0.017 (93 %)
+
+Each piece matters: without the fold the particles of the half cell above the inflow give part of their
+drag to the inflow and rest on the floor instead; without pairing the gas's −ε∇p (mapped ε) gives up
+~8 % less pressure force than the particles' −V_p∇p gain; an inlet pressure extrapolated from the first
+rows counts the lowest half cell's weight twice, since the first interior faces carry it.
 """
 import math
 import sys
@@ -53,57 +56,28 @@ from fluidem.case import validate_case  # noqa: E402
 from fluidem.simulation import Simulation  # noqa: E402
 
 
-def fold_inflow_weights():
-    """The ``--fold`` experiment (module docstring): the deposit and force kernels of the "particle" exchange
-    see the first solved y-face's gas velocity on the inflow face, and the inflow face's face sums are moved
-    onto that face before the gas takes them. For the bottom inflow of this bed only."""
-    import inspect
-
-    import fluidem.coupling.exchange as X
-
-    deposit, forces = X.P.deposit, X.P.particle_forces_split
-
-    def folded(v):
-        w = v.copy()
-        w[:, 0] = v[:, 1]
-        return w
-
-    def call(kernel, a, v="v"):
-        """kernel(*a) with its gas velocity ``v`` folded; returns (result, the arguments by name)."""
-        args = inspect.signature(kernel.py_func).bind(*a).arguments
-        args[v] = folded(args[v])
-        return kernel(*args.values()), args
-
-    def deposit_folded(*a):
-        bad, k = call(deposit, a)
-        av, bv, beta_v, solids_v = k["AV"], k["BV"], k["beta_v"], k["sv"]
-        av[:, 1] += av[:, 0]
-        bv[:, 1] += bv[:, 0]
-        av[:, 0] = bv[:, 0] = beta_v[:, 0] = solids_v[:, 0] = 0.0
-        beta_v[:, 1] = av[:, 1] / k["vol"]
-        solids_v[:, 1] = np.where(av[:, 1] > 0.0, bv[:, 1] / np.where(av[:, 1] > 0.0, av[:, 1], 1.0), 0.0)
-        return bad
-
-    def forces_folded(*a):
-        return call(forces, a)[0]
-
-    X.P.deposit, X.P.particle_forces_split = deposit_folded, forces_folded
-
-
-def from_first_centre(grid, p, height):
-    """Pressure drop from the first row of cell centres (width-averaged) to ``height`` (``--centre``)."""
+def extrapolated(grid, p, height):
+    """Pressure drop with the inlet pressure extrapolated linearly from the first two rows of centres (the
+    analysis's reading before the thirteenth session; ``--extrapolate``)."""
     from fluidem.analysis.fluidised import pressure_at_heights
 
-    return float(np.asarray(p).mean(axis=0)[0] - pressure_at_heights(grid, p, [height])[0])
+    prof = np.asarray(p).mean(axis=0)
+    y0, y1 = grid.y_centres[:2]
+    inlet = prof[0] - y0 * (prof[1] - prof[0]) / (y1 - y0)
+    return float(inlet - pressure_at_heights(grid, p, [height])[0])
 
 
-def main(eps_in=1.0, exchange="particle", u=0.4, end=0.65, start=0.35, profile=False):
-    T.N, T.W, T.DEPTH = 2000, 20 * T.D, 5 * T.D  # the 20 x 5 d bed (5 x 15 cells of 4 d)
+def main(eps_in=1.0, exchange="particle", u=0.4, end=0.65, start=0.35, profile=False, faces="fold", pairing=True,
+         wide=False):
+    if not wide:
+        T.N, T.W, T.DEPTH = 2000, 20 * T.D, 5 * T.D  # the 20 x 5 d bed (5 x 15 cells of 4 d)
     c = T.sweep_case().model_dump(mode="json", exclude_none=True)
     bottom = c["gas"]["boundaries"]["bottom"]
     bottom["voidage"] = eps_in
     bottom["superficial"] = {"table": [[0.0, 0.0], [T.T_SETTLE, 0.0], [T.T_SETTLE + 0.1, u], [10.0, u]]}
     c["coupling"]["momentum_exchange"] = exchange
+    c["coupling"]["boundary_faces"] = faces
+    c["coupling"]["pressure_pairing"] = pairing
     c["time"]["end"] = end
     sim = Simulation(validate_case(c))
     chunk = int(round(0.005 / sim.dt))
@@ -124,7 +98,7 @@ def main(eps_in=1.0, exchange="particle", u=0.4, end=0.65, start=0.35, profile=F
             k = np.clip((st.position[:, 1] / T.D).astype(int), 0, layers.shape[1] - 1)
             layers[0] += np.bincount(k, f, layers.shape[1])
             layers[1] += np.bincount(k, mg, layers.shape[1])
-    print(f"inflow voidage {eps_in}, exchange {exchange}, {u} m/s: bed pressure drop / (W/A) = "
+    print(f"inflow voidage {eps_in}, exchange {exchange}, boundary_faces {faces}, pressure_pairing {pairing}, {u} m/s: bed pressure drop / (W/A) = "
           f"{np.mean(dp) / wa:.4f}; gas force on particles / m g = {np.mean(fg) / weight:.4f}; "
           f"bottom wall / m g = {np.mean(floor) / weight:.4f} (touched in {np.mean(np.array(floor) > 0):.0%} of the gas steps)")
     if profile:
@@ -133,9 +107,10 @@ def main(eps_in=1.0, exchange="particle", u=0.4, end=0.65, start=0.35, profile=F
 
 
 if __name__ == "__main__":
-    if "--fold" in sys.argv:
-        fold_inflow_weights()
-    if "--centre" in sys.argv:
-        pressure_drop = from_first_centre  # noqa: F811 (main reads the module's name)
+    if "--extrapolate" in sys.argv:
+        pressure_drop = extrapolated  # noqa: F811 (main reads the module's name)
     args = [a for a in sys.argv[1:] if not a.startswith("--")]
-    main(float(args[0]) if args else 1.0, args[1] if len(args) > 1 else "particle", profile="--profile" in sys.argv)
+    main(float(args[0]) if args else 1.0, args[1] if len(args) > 1 else "particle",
+         float(args[2]) if len(args) > 2 else 0.4, profile="--profile" in sys.argv,
+         faces="exchange" if "--exchange-faces" in sys.argv else "fold", pairing="--no-pairing" not in sys.argv,
+         wide="--wide" in sys.argv)

@@ -340,15 +340,16 @@ def test_paired_kernels_give_the_same_bits_on_any_number_of_threads(all_threads,
         sums = [np.zeros(a.shape) for a in cpl._faces]
         kc = np.zeros(gd.shape)
         face = [np.zeros(gd.u_shape), np.zeros(gd.u_shape), np.zeros(gd.v_shape), np.zeros(gd.v_shape)]
+        pv = [np.zeros(gd.u_shape), np.zeros(gd.v_shape)]
         bad = P.deposit(cpl.drag.code, st.position, st.velocity, st.radius, cpl.volume, gs.u, gs.v, gs.voidage,
                         gs.rho, cpl.solver.props.viscosity, gd.dx, gd.dy, 0.0, *cpl._periodic, kp, *sums, kc,
-                        gd.cell_volume, *face, parallel)
-        return bad, [kp, kc, *sums, *face]
+                        gd.cell_volume, *face, True, *pv, parallel)
+        return bad, [kp, kc, *sums, *face, *pv]
 
     def split(kp, parallel):
         ext, damp, total = np.ones((st.n, 3)), np.full(st.n, 0.5), np.zeros((st.n, 3))
         P.particle_forces_split(st.position, st.velocity, cpl.volume, kp, gs.u, gs.v, gs.p, gd.dx, gd.dy,
-                                *cpl._periodic, True, True, ext, damp, total, parallel)
+                                *cpl._periodic, True, True, True, ext, damp, total, parallel)
         return [ext, damp, total]
 
     bad, serial = deposit(False)

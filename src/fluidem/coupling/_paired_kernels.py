@@ -14,9 +14,18 @@ Because Σ_f w_pf = 1 for every particle, Σ_f V_f β_f (u_f − u_s,f) = Σ_p K
 the gas loses exactly the momentum the particles gain, whatever the weights. Weights that
 reach a boundary node of the extended grid are folded back onto real nodes so they stay
 non-negative: the nearest node ("copy") at a wall, half to each of the two wrapped nodes on a
-periodic side (which is exact linear interpolation across it). Drag deposited on a face whose
-velocity the gas does not solve (a wall or inflow face) is momentum exchanged with that
-boundary.
+periodic side (which is exact linear interpolation across it). Along the face axis of a
+non-periodic side, ``fold`` (``coupling.boundary_faces = "fold"``, the default) moves the
+boundary face's weight onto the first interior face: the gas solves no momentum on a wall or
+inflow face, and the half cell along it has no control volume of its own, so the first interior
+face's stands for it (as it does for ∇p, ``_face_gradient``). Without ``fold`` the drag deposited
+on such a face is momentum exchanged with that boundary: near an inflow, weight of the bed that
+the gas pressure does not carry (issue 4's u_mf sweep: plateau −4.6 % of W/A).
+
+``deposit`` (and ``pressure_voidage`` for the other exchanges) also gives the gas the voidage of
+its pressure term, ε_p,f = 1 − Σ_p w_pf V_p / V_f with the weights of the particles' ∇p, so
+that the −V_p ∇p of the particles (Sun 2007 eq. 28) and the gas's −ε_p,f ∇p add up to −V_f ∇p
+on every face: the pressure force is exchanged as exactly as the drag (``coupling.pressure_pairing``).
 
 ``cell`` mode (Sun 2007's cell-averaged drag shared by the particles of the cell):
 
@@ -105,9 +114,17 @@ def _centre_axis(x, inv_d, n, periodic):
 
 
 @njit(cache=True, inline="always")
-def _face_axis(x, inv_d, n, periodic):
+def _face_axis(x, inv_d, n, periodic, fold):
     """(k0, k1, w0, w1) as ``_centre_axis`` for nodes at the faces k d, k = 0 … n (on a periodic
-    axis face n is face 0)."""
+    axis face n is face 0).
+
+    ``fold`` (a non-periodic axis of at least two cells): the weight of a boundary face (0 or n,
+    which the gas does not solve, or at a pressure outlet solves without particles) goes to the first
+    interior face (1 or n − 1), so a particle in the half cell along the boundary takes the gas
+    velocity of that face and hands its drag to the gas there; the half cell has no momentum
+    control volume of its own, so the first interior one stands for it. This is also how ∇p is
+    interpolated in either case (``_face_gradient`` copies the interior face onto the boundary one).
+    """
     s = x * inv_d
     if not s > 0.0:
         s = 0.0
@@ -116,6 +133,11 @@ def _face_axis(x, inv_d, n, periodic):
     k = int(math.floor(s))
     if k > n - 1:
         k = n - 1
+    if fold and not periodic and n >= 2:
+        if k == 0:
+            return 1, 1, 1.0, 0.0
+        if k == n - 1:
+            return n - 1, n - 1, 1.0, 0.0
     t = s - k
     k1 = k + 1
     if periodic and k1 == n:
@@ -124,13 +146,13 @@ def _face_axis(x, inv_d, n, periodic):
 
 
 @njit(cache=True, inline="always")
-def _stencil(x, y, idx, idy, nx, ny, px, py):
+def _stencil(x, y, idx, idy, nx, ny, px, py, fold):
     """The nodes and weights around (x, y) on both axes: centres along x, faces along x, centres along
-    y, faces along y (``_centre_axis``, ``_face_axis``), 16 scalars."""
+    y, faces along y (``_centre_axis``, ``_face_axis`` with ``fold``), 16 scalars."""
     ci0, ci1, cw0, cw1 = _centre_axis(x, idx, nx, px)
-    fi0, fi1, fw0, fw1 = _face_axis(x, idx, nx, px)
+    fi0, fi1, fw0, fw1 = _face_axis(x, idx, nx, px, fold)
     cj0, cj1, cv0, cv1 = _centre_axis(y, idy, ny, py)
-    fj0, fj1, fv0, fv1 = _face_axis(y, idy, ny, py)
+    fj0, fj1, fv0, fv1 = _face_axis(y, idy, ny, py, fold)
     return ci0, ci1, cw0, cw1, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, fj0, fj1, fv0, fv1
 
 
@@ -174,7 +196,7 @@ def _scatter(A, B, i0, i1, a0, a1, j0, j1, b0, b1, k, vel):
 
 @njit(cache=True, error_model="numpy")
 def deposit(code, position, velocity, radius, volume, u, v, voidage, rho, mu, dx, dy, min_voidage, px, py, kp,
-            AU, BU, AV, BV, KC, vol, beta_u, su, beta_v, sv, parallel=False):
+            AU, BU, AV, BV, KC, vol, beta_u, su, beta_v, sv, fold, EU, EV, parallel=False):
     """K_p and the face sums of the ``particle`` mode (module docstring); returns the number of
     particles whose drag arguments are out of range (their K_p is NaN, nothing deposited).
 
@@ -183,7 +205,10 @@ def deposit(code, position, velocity, radius, volume, u, v, voidage, rho, mu, dx
     [min_voidage, 1] at the particle), rho, KC : (nx, ny). A*, B* are overwritten; KC[i, j] becomes
     Σ K_p over the particles whose centre lies in cell (i, j) (for output: Sun 2007 eq. 33's cell β
     times V_cell). What the gas takes (vol = V_cell): beta_u = AU / vol, su = BU / AU (0 where AU = 0),
-    and the same on the y-faces.
+    and the same on the y-faces. ``fold``: boundary faces folded (``_face_axis``).
+
+    EU (nx + 1, ny), EV (nx, ny + 1), or both (0, 0) for none: the pressure term's face voidage
+    (``pressure_voidage``), deposited in the same pass.
     """
     nx, ny = voidage.shape
     idx, idy = 1.0 / dx, 1.0 / dy
@@ -196,32 +221,48 @@ def deposit(code, position, velocity, radius, volume, u, v, voidage, rho, mu, dx
     valid = np.empty(n, dtype=np.bool_)
     if parallel and n > CHUNK:
         bad = _kp_parallel(code, position, velocity, radius, volume, u, v, voidage, rho, mu, idx, idy, min_voidage,
-                           px, py, kp, valid)
+                           px, py, fold, kp, valid)
     else:
         bad = _kp_range(0, n, code, position, velocity, radius, volume, u, v, voidage, rho, mu, idx, idy, min_voidage,
-                        px, py, kp, valid)
+                        px, py, fold, kp, valid)
+    solids = EU.shape[0] > 0
+    if solids:
+        EU[:, :] = 0.0
+        EV[:, :] = 0.0
     for q_ in range(n):  # the face sums, in particle order
         q = U(q_)
-        if not valid[q]:
-            continue
         x = position[q, U(0)]
         y = position[q, U(1)]
+        (ci0, ci1, cw0, cw1, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, fj0, fj1, fv0,
+         fv1) = _stencil(x, y, idx, idy, nx, ny, px, py, fold)
+        if solids:  # V_p on the faces of its ∇p interpolation (always folded: ``_face_gradient``)
+            if not fold:
+                fi0, fi1, fw0, fw1 = _face_axis(x, idx, nx, px, True)
+                fj0, fj1, fv0, fv1 = _face_axis(y, idy, ny, py, True)
+            _add(EU, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, volume[q])
+            _add(EV, ci0, ci1, cw0, cw1, fj0, fj1, fv0, fv1, volume[q])
+            if not fold:
+                fi0, fi1, fw0, fw1 = _face_axis(x, idx, nx, px, False)
+                fj0, fj1, fv0, fv1 = _face_axis(y, idy, ny, py, False)
+        if not valid[q]:
+            continue
         ic = min(max(int(x / dx), 0), nx - 1)
         jc = min(max(int(y / dy), 0), ny - 1)
-        (ci0, ci1, cw0, cw1, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, fj0, fj1, fv0,
-         fv1) = _stencil(x, y, idx, idy, nx, ny, px, py)
         k = kp[q]
         KC[U(ic), U(jc)] += k
         _scatter(AU, BU, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, k, velocity[q, U(0)])
         _scatter(AV, BV, ci0, ci1, cw0, cw1, fj0, fj1, fv0, fv1, k, velocity[q, U(1)])
     _face_coefficients(AU, BU, vol, beta_u, su)
     _face_coefficients(AV, BV, vol, beta_v, sv)
+    if solids:
+        _face_voidage(EU, vol, min_voidage)
+        _face_voidage(EV, vol, min_voidage)
     return bad
 
 
 @njit(cache=True, error_model="numpy")
 def _kp_range(lo, hi, code, position, velocity, radius, volume, u, v, voidage, rho, mu, idx, idy, min_voidage, px,
-              py, kp, valid):
+              py, fold, kp, valid):
     """kp[q] of ``deposit`` for particles lo..hi−1, valid[q] whether its drag arguments are in range (else
     kp[q] = NaN); returns the number out of range."""
     nx, ny = voidage.shape
@@ -232,7 +273,7 @@ def _kp_range(lo, hi, code, position, velocity, radius, volume, u, v, voidage, r
         x = position[q, U(0)]
         y = position[q, U(1)]
         (ci0, ci1, cw0, cw1, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, fj0, fj1, fv0,
-         fv1) = _stencil(x, y, idx, idy, nx, ny, px, py)
+         fv1) = _stencil(x, y, idx, idy, nx, ny, px, py, fold)
         eps = _mean(voidage, ci0, ci1, cw0, cw1, cj0, cj1, cv0, cv1)
         rg = _mean(rho, ci0, ci1, cw0, cw1, cj0, cj1, cv0, cv1)
         if eps < min_voidage:
@@ -255,13 +296,13 @@ def _kp_range(lo, hi, code, position, velocity, radius, volume, u, v, voidage, r
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
-def _kp_parallel(code, position, velocity, radius, volume, u, v, voidage, rho, mu, idx, idy, min_voidage, px, py, kp,
-                 valid):
+def _kp_parallel(code, position, velocity, radius, volume, u, v, voidage, rho, mu, idx, idy, min_voidage, px, py, fold,
+                 kp, valid):
     n = position.shape[0]
     bad = 0
     for c in prange((n + CHUNK - 1) // CHUNK):
         bad += _kp_range(c * CHUNK, min(n, (c + 1) * CHUNK), code, position, velocity, radius, volume, u, v, voidage,
-                         rho, mu, idx, idy, min_voidage, px, py, kp, valid)
+                         rho, mu, idx, idy, min_voidage, px, py, fold, kp, valid)
     return bad
 
 
@@ -276,11 +317,54 @@ def _face_coefficients(A, B, vol, beta, solids):
 
 
 @njit(cache=True, inline="always")
-def _gas_at(x, y, u, v, p, idx, idy, nx, ny, px, py, velocity, pressure):
+def _add(E, i0, i1, a0, a1, j0, j1, b0, b1, k):
+    """E[i, j] += a_i b_j k over the two nodes of each axis."""
+    E[U(i0), U(j0)] += a0 * b0 * k
+    E[U(i0), U(j1)] += a0 * b1 * k
+    E[U(i1), U(j0)] += a1 * b0 * k
+    E[U(i1), U(j1)] += a1 * b1 * k
+
+
+@njit(cache=True, error_model="numpy")
+def _face_voidage(E, vol, min_voidage):
+    """E (the particle volume on each face) → max(1 − E / vol, min_voidage): ``pressure_voidage``."""
+    for i in range(E.shape[0]):
+        for j in range(E.shape[1]):
+            E[i, j] = max(1.0 - E[i, j] / vol, min_voidage)
+
+
+@njit(cache=True, error_model="numpy")
+def pressure_voidage(position, volume, dx, dy, px, py, vol, min_voidage, EU, EV):
+    """The voidage of the gas's pressure term −ε_p,f ∂p/∂x that pairs the particles' −V_p ∇p_p:
+    ε_p,f = 1 − Σ_p w_pf V_p / V_f with the weights w_pf by which ∇p is interpolated to particle p
+    (``_gradient_at``: boundary faces folded), clipped below at ``min_voidage``.
+
+    Then Σ_f (1 − ε_p,f) V_f ∂p/∂x|_f = Σ_p V_p ∂p/∂x|_p: the gas (−ε_p,f ∇p) and the particles
+    (−V_p ∇p, Sun 2007 eq. 28) together feel −∇p V_f on each face, as the mixture must, so the
+    pressure force is exchanged as drag is (Newton's third law), wherever no face is clipped.
+    The mean of the mapped cell voidages (the gas's ε_f elsewhere) agrees with it only up to the
+    mapping, and at an inflow face not at all (a bed on an inflow lost part of its weight there).
+    EU (nx + 1, ny), EV (nx, ny + 1) are overwritten."""
+    nx, ny = EU.shape[0] - 1, EU.shape[1]
+    idx, idy = 1.0 / dx, 1.0 / dy
+    EU[:, :] = 0.0
+    EV[:, :] = 0.0
+    for q_ in range(position.shape[0]):
+        q = U(q_)
+        (ci0, ci1, cw0, cw1, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, fj0, fj1, fv0,
+         fv1) = _stencil(position[q, U(0)], position[q, U(1)], idx, idy, nx, ny, px, py, True)
+        _add(EU, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, volume[q])
+        _add(EV, ci0, ci1, cw0, cw1, fj0, fj1, fv0, fv1, volume[q])
+    _face_voidage(EU, vol, min_voidage)
+    _face_voidage(EV, vol, min_voidage)
+
+
+@njit(cache=True, inline="always")
+def _gas_at(x, y, u, v, p, idx, idy, nx, ny, px, py, fold, velocity, pressure):
     """Gas velocity (u, v) and ∇p at (x, y), interpolated with the weights of ``deposit`` (the velocity
     from its faces, ∇p by ``_gradient_at``); 0.0 for what is not asked (``velocity``, ``pressure``)."""
     (ci0, ci1, cw0, cw1, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, fj0, fj1, fv0,
-     fv1) = _stencil(x, y, idx, idy, nx, ny, px, py)
+     fv1) = _stencil(x, y, idx, idy, nx, ny, px, py, fold)
     ug = 0.0
     vg = 0.0
     gx = 0.0
@@ -295,7 +379,7 @@ def _gas_at(x, y, u, v, p, idx, idy, nx, ny, px, py, velocity, pressure):
 
 
 @njit(cache=True, error_model="numpy")
-def particle_forces(position, velocity, volume, kp, u, v, p, dx, dy, px, py, pressure_force, dim2, out, total):
+def particle_forces(position, velocity, volume, kp, u, v, p, dx, dy, px, py, fold, pressure_force, dim2, out, total):
     """out[q] = K_q (u_q − v_q) − V_q ∇p_q [N] (Sun 2007 eqs 28-29) with the weights of ``deposit``.
 
     ∇p at the particle: the face gradients (``_face_gradient``) interpolated like the velocity on
@@ -308,7 +392,7 @@ def particle_forces(position, velocity, volume, kp, u, v, p, dx, dy, px, py, pre
     follow = total.shape[0] > 0
     for q_ in range(position.shape[0]):
         q = U(q_)
-        ug, vg, gx, gy = _gas_at(position[q, U(0)], position[q, U(1)], u, v, p, idx, idy, nx, ny, px, py, True,
+        ug, vg, gx, gy = _gas_at(position[q, U(0)], position[q, U(1)], u, v, p, idx, idy, nx, ny, px, py, fold, True,
                                  pressure_force)
         k = kp[q]
         fx = k * (ug - velocity[q, U(0)])
@@ -323,14 +407,14 @@ def particle_forces(position, velocity, volume, kp, u, v, p, dx, dy, px, py, pre
 
 
 @njit(cache=True, error_model="numpy")
-def _split_range(lo, hi, position, velocity, volume, kp, u, v, p, idx, idy, px, py, pressure_force, dim2, ext, damp,
-                 total):
+def _split_range(lo, hi, position, velocity, volume, kp, u, v, p, idx, idy, px, py, fold, pressure_force, dim2, ext,
+                 damp, total):
     """``particle_forces_split`` for particles lo..hi−1."""
     nx, ny = p.shape
     three = velocity.shape[1] > 2
     for q_ in range(lo, hi):
         q = U(q_)
-        ug, vg, gx, gy = _gas_at(position[q, U(0)], position[q, U(1)], u, v, p, idx, idy, nx, ny, px, py, True,
+        ug, vg, gx, gy = _gas_at(position[q, U(0)], position[q, U(1)], u, v, p, idx, idy, nx, ny, px, py, fold, True,
                                  pressure_force)
         k = kp[q]
         ax = k * ug
@@ -353,16 +437,17 @@ def _split_range(lo, hi, position, velocity, volume, kp, u, v, p, idx, idy, px, 
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
-def _split_parallel(position, velocity, volume, kp, u, v, p, idx, idy, px, py, pressure_force, dim2, ext, damp, total):
+def _split_parallel(position, velocity, volume, kp, u, v, p, idx, idy, px, py, fold, pressure_force, dim2, ext, damp,
+                    total):
     n = position.shape[0]
     for c in prange((n + CHUNK - 1) // CHUNK):
         _split_range(c * CHUNK, min(n, (c + 1) * CHUNK), position, velocity, volume, kp, u, v, p, idx, idy, px, py,
-                     pressure_force, dim2, ext, damp, total)
+                     fold, pressure_force, dim2, ext, damp, total)
 
 
 @njit(cache=True, error_model="numpy")
-def particle_forces_split(position, velocity, volume, kp, u, v, p, dx, dy, px, py, pressure_force, dim2, ext, damp,
-                          total, parallel=False):
+def particle_forces_split(position, velocity, volume, kp, u, v, p, dx, dy, px, py, fold, pressure_force, dim2, ext,
+                          damp, total, parallel=False):
     """``particle_forces`` split for a drag that follows the particle's own velocity (``drag_update =
     "substep"``): the fixed part ext[q] = K_q u_q − V_q ∇p_q and the coefficient damp[q] = K_q, so that
     the engine evaluates ext − K v at every sub-step's velocity (Sun 2007 eq. 29 with u_q held from the
@@ -371,11 +456,11 @@ def particle_forces_split(position, velocity, volume, kp, u, v, p, dx, dy, px, p
     ``parallel``: chunks of particles on all threads (each particle's numbers as on one)."""
     n = position.shape[0]
     if parallel and n > CHUNK:
-        _split_parallel(position, velocity, volume, kp, u, v, p, 1.0 / dx, 1.0 / dy, px, py, pressure_force, dim2,
-                        ext, damp, total)
+        _split_parallel(position, velocity, volume, kp, u, v, p, 1.0 / dx, 1.0 / dy, px, py, fold, pressure_force,
+                        dim2, ext, damp, total)
     else:
-        _split_range(0, n, position, velocity, volume, kp, u, v, p, 1.0 / dx, 1.0 / dy, px, py, pressure_force, dim2,
-                     ext, damp, total)
+        _split_range(0, n, position, velocity, volume, kp, u, v, p, 1.0 / dx, 1.0 / dy, px, py, fold, pressure_force,
+                     dim2, ext, damp, total)
 
 
 @njit(cache=True, inline="always")
@@ -431,7 +516,8 @@ def cell_forces(position, velocity, volume, beta, solids_u, solids_v, u, v, p, d
         fy = share * (0.5 * (v[i, j] + v[i, j + 1]) - solids_v[i, j])
         fz = 0.0
         if pressure_force:
-            _, _, gx, gy = _gas_at(position[q, 0], position[q, 1], u, v, p, idx, idy, nx, ny, px, py, False, True)
+            _, _, gx, gy = _gas_at(position[q, 0], position[q, 1], u, v, p, idx, idy, nx, ny, px, py, True, False,
+                                   True)
             fx -= volume[q] * gx
             fy -= volume[q] * gy
         store_force(out, total, q, fx, fy, fz, follow)

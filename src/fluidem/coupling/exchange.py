@@ -21,8 +21,14 @@ At the start of every gas step (every ``substeps`` DEM steps):
    plus −V_p ∇p when enabled (Sun 2007 eq. 28);
 5. the DEM sub-steps of DT (the engine's dt is DT / ceil(DT / dt_DEM)).
 
-Drag a particle hands to a face whose velocity the gas does not solve (a wall, an inflow) is
-momentum exchanged with that boundary. ``exchange_balance`` reports the three sums.
+With ``coupling.boundary_faces = "fold"`` (default) the "particle" exchange hands no drag to a face
+whose velocity the gas does not solve (a wall, an inflow): a particle in the half cell along it
+exchanges with the first interior face (``_paired_kernels._face_axis``). With ``"exchange"``, and
+in the "cell" exchange, drag on such a face is momentum exchanged with that boundary.
+``exchange_balance`` reports the three sums. With ``pressure_gradient_force`` and
+``pressure_pairing`` (defaults) the gas's pressure term is −ε_p,f ∇p with ε_p,f = 1 − (particle
+volume deposited on the face as their ∇p is interpolated) / V_f, so that gas and particles share
+−V_f ∇p exactly (``_paired_kernels.pressure_voidage``; ``exchange_balance`` reports both sides).
 
 With ``drag_update = "substep"`` (the default) the drag follows the particles through the
 sub-steps in the gas field of t + DT, which makes the pairing approximate: ``"particle"`` keeps
@@ -100,6 +106,12 @@ class GasCoupling:
         self._face_beta = (np.zeros(gd.u_shape), np.zeros(gd.v_shape))
         self._face_solids = (np.zeros(gd.u_shape), np.zeros(gd.v_shape))
         self._cell_inputs = None  # β, v_s,x, v_s,y per cell of the "cell" exchange
+        self._fold = self.options.boundary_faces == "fold" and self.exchange == "particle"
+        # the gas's pressure term paired with the particles' −V_p ∇p (CouplingSection.pressure_pairing)
+        self._pair_pressure = (bool(self.options.pressure_pairing) and bool(self.options.pressure_gradient_force)
+                               and self.exchange in ("particle", "cell"))
+        self._pressure_voidage = (np.ones(gd.u_shape), np.ones(gd.v_shape))
+        self._no_faces = np.zeros((0, 0))
         if hasattr(engine, "reorder_listeners"):  # per-particle arrays here follow the engine's renumbering
             engine.reorder_listeners.append(self._reorder)
         self._paired_ready = False  # K_p / cell inputs of a gas step at hand (else forces as "cell_beta")
@@ -231,8 +243,15 @@ class GasCoupling:
         self.last_map = smap
         self.last_face_beta = beta if isinstance(beta, tuple) else None
         self.last_beta = self._kp_cells / gd.cell_volume if self.exchange == "particle" else self._cell_inputs[0]
+        pv = None
+        if self._pair_pressure:
+            pv = self._pressure_voidage
+            if self.exchange != "particle":  # "particle": ``_deposit`` has filled them
+                st = self._particles()
+                P.pressure_voidage(st.position, self.volume, gd.dx, gd.dy, *self._periodic, gd.cell_volume,
+                                   self.mapping.minimum_voidage, *pv)
         self.last_info = self.solver.advance(self.state, self.gas_dt, t, voidage=smap.voidage, beta=beta,
-                                             solids_u=us, solids_v=vs)
+                                             solids_u=us, solids_v=vs, pressure_voidage=pv)
         self.courant_max = max(self.courant_max, self.last_info.courant)
         self.gas_steps += 1
         self._paired_ready = True
@@ -249,6 +268,7 @@ class GasCoupling:
                         gs.rho, self.solver.props.viscosity, gd.dx, gd.dy, self.mapping.minimum_voidage,
                         *self._periodic, self._kp, au, bu_, av, bv_, self._kp_cells, gd.cell_volume,
                         self._face_beta[0], self._face_solids[0], self._face_beta[1], self._face_solids[1],
+                        self._fold, *(self._pressure_voidage if self._pair_pressure else (self._no_faces,) * 2),
                         numba.get_num_threads() > 1)
         if bad:
             raise ValueError(f"particle drag: arguments out of range for {bad} particles "
@@ -266,7 +286,8 @@ class GasCoupling:
             st, gs, gd = self._particles(), self.state, self.grid
             self._check_gas()
             P.particle_forces_split(st.position, st.velocity, self.volume, self._kp, gs.u, gs.v, gs.p, gd.dx, gd.dy,
-                                    *self._periodic, bool(self.options.pressure_gradient_force), bool(eng.dim2),
+                                    *self._periodic, self._fold, bool(self.options.pressure_gradient_force),
+                                    bool(eng.dim2),
                                     eng.ext_force, eng.ext_damping, st.force, numba.get_num_threads() > 1)
             return
         self._forces(eng.ext_force, eng.state.force)
@@ -281,7 +302,7 @@ class GasCoupling:
         self._check_gas()
         if self.exchange == "particle":
             P.particle_forces(st.position, st.velocity, self.volume, self._kp, gs.u, gs.v, gs.p, gd.dx, gd.dy,
-                              *self._periodic, bool(pressure), bool(self.engine.dim2), out, total)
+                              *self._periodic, self._fold, bool(pressure), bool(self.engine.dim2), out, total)
         else:
             P.cell_forces(st.position, st.velocity, self.volume, *self._cell_inputs, gs.u, gs.v, gs.p, gd.dx, gd.dy,
                           gd.cell_volume, *self._periodic, bool(pressure), bool(self.engine.dim2), out, total)
@@ -291,7 +312,10 @@ class GasCoupling:
         V_f β_f (u_f − u_s,f) (what the gas lost), ``boundary`` the same over the other faces (wall,
         inflow: exchanged with the boundary), ``particles`` Σ_p of the particle drag (without −V_p ∇p).
         For ``"particle"`` and ``"cell"`` gas + boundary = particles to round-off, at the end of the
-        gas step (before the DEM sub-steps move the particles)."""
+        gas step (before the DEM sub-steps move the particles). With ``pressure_pairing`` also
+        ``pressure_gas``, Σ over the solved faces of (1 − ε_p,f) V_f ∇p_f (the pressure force the gas
+        gives up against a gas of voidage 1), and ``pressure_particles``, Σ_p V_p ∇p_p: equal to
+        round-off."""
         gd, gs = self.grid, self.state
         if self.last_beta is None:
             raise RuntimeError("exchange_balance: no gas step taken yet")
@@ -325,7 +349,33 @@ class GasCoupling:
         copy_v = self.solver.vkind == SK.COPY
         gas = np.array([fu[solved_u].sum(), fv[solved_v].sum()])
         boundary = np.array([fu[~(solved_u | copy_u)].sum(), fv[~(solved_v | copy_v)].sum()])
-        return {"gas": gas, "boundary": boundary, "particles": drag[:, :2].sum(axis=0)}
+        out = {"gas": gas, "boundary": boundary, "particles": drag[:, :2].sum(axis=0)}
+        if self._pair_pressure:
+            both = np.zeros((n, 3))
+            self._forces(both, np.empty((0, 3)), pressure=True)
+            out["pressure_particles"] = (drag - both)[:, :2].sum(axis=0)  # Σ_p V_p ∇p_p
+            gx, gy = self._face_gradients()
+            eu, ev = self._pressure_voidage
+            out["pressure_gas"] = gd.cell_volume * np.array([((1.0 - eu) * gx)[solved_u].sum(),
+                                                             ((1.0 - ev) * gy)[solved_v].sum()])
+        return out
+
+    def _face_gradients(self):
+        """∂p/∂x on the x-faces and ∂p/∂y on the y-faces [Pa/m] as the particles' ∇p interpolation takes
+        them (``_paired_kernels._face_gradient``: a boundary face copies its interior neighbour)."""
+        p, gd = self.state.p, self.grid
+        out = []
+        for q, d, periodic in ((p, gd.dx, self._periodic[0]), (p.T, gd.dy, self._periodic[1])):
+            n = q.shape[0]
+            g = np.zeros((n + 1, q.shape[1]))
+            if n >= 2:
+                g[1:n] = np.diff(q, axis=0) / d
+                if periodic:
+                    g[0] = g[n] = (q[0] - q[n - 1]) / d
+                else:
+                    g[0], g[n] = g[1], g[n - 1]
+            out.append(g)
+        return out[0], np.ascontiguousarray(out[1].T)
 
     # ------------------------------------------------------------ stepping
     def advance(self, nsteps: int) -> None:

@@ -178,10 +178,11 @@ def fill_face_ghosts(U, V, flags, nx, ny):
 C_P, C_RHO, C_E, C_PFIX, C_PFIX_OLD, C_EFIX, C_RO_OLD, C_SXX, C_SYY = range(9)
 N_C = 9
 # FU (10, nx + 1, ny), FV (10, nx, ny + 1) face arrays without ghosts:
-F_OLD, F_EX, F_BETA, F_RHS, F_FIX, F_WOUT, F_FLUX, F_EF, F_X1, F_X2 = range(10)
-N_F = 10
+F_OLD, F_EX, F_BETA, F_RHS, F_FIX, F_WOUT, F_FLUX, F_EF, F_X1, F_X2, F_EP = range(11)
+N_F = 11
 # (velocity at t, explicit terms, β, β u_s + source, fixed value, outflow share, mass flux A (ερ)_f w
-#  along +x / +y [kg/s], face voidage ε_f at t + dt, u_old/dt + g, explicit terms + β u_s + source)
+#  along +x / +y [kg/s], face voidage ε_f at t + dt, u_old/dt + g, explicit terms + β u_s + source,
+#  the voidage ε_p,f of the pressure term −ε_p,f ∂p/∂x: ε_f, or the step input ``pressure_voidage``)
 # KU (2, nx + 1, ny), KV (2, nx, ny + 1) int8: face kind and inward sign (+1 / -1 on boundary faces, else 0)
 K_KIND, K_SIGN = 0, 1
 # RULES (2, 9): ghost rule per flag for the pressure (row 0) and the voidage (row 1)
@@ -198,8 +199,8 @@ L_LP, L_UP, L_PERM_R, L_PERM_C = 0, 1, 2, 3
  F_MU, F_ETA) = range(16)
 N_FPAR = 16
 (I_NX, I_NY, I_MAXIT, I_PIN, I_HAVE_LU, I_ITER, I_CHECKED, I_REFACTORED, I_RESUME, I_SCHEME, I_SOLVER, I_BW,
- I_NFACT, I_LEVELS, I_KRYLOV, I_KRYLOV_MAX, I_RESTART, I_PX, I_PY, I_BLOCKS) = range(20)
-N_IPAR = 20
+ I_NFACT, I_LEVELS, I_KRYLOV, I_KRYLOV_MAX, I_RESTART, I_PX, I_PY, I_BLOCKS, I_PRESSURE_VOIDAGE) = range(21)
+N_IPAR = 21
 O_RES, O_QREF, O_IN, O_OUT, O_ACC, O_MASS, O_COURANT, O_REL, O_PREV = range(9)
 # linear solvers of the pressure correction (ipar[I_SOLVER])
 SOLVER_SUPERLU, SOLVER_BAND, SOLVER_MULTIGRID = 0, 1, 2
@@ -209,7 +210,8 @@ MASS_FLOOR = 1e-4  # share of (gas mass / dt) in the reference flow of the mass 
 BLOCK_REUSE = 0.3  # band: blocks whose rows changed by less than this share of F_REUSE keep their factors
 # modes of the step inputs (begin_step's ``modes``): not given / a number (at [0, 0]) / cell centres / faces
 IN_NONE, IN_SCALAR, IN_CENTRE, IN_FACE = 0, 1, 2, 3
-IN_VOIDAGE, IN_BETA, IN_SOLIDS_U, IN_SOLIDS_V, IN_SOURCE_U, IN_SOURCE_V = range(6)
+IN_VOIDAGE, IN_BETA, IN_SOLIDS_U, IN_SOLIDS_V, IN_SOURCE_U, IN_SOURCE_V, IN_PRESSURE_VOIDAGE = range(7)
+N_IN = 7
 # begin_step status
 INPUT_OK, BAD_VOIDAGE, BAD_BETA = 0, 1, 2
 
@@ -344,6 +346,22 @@ def load_inputs(eps_in, bu, bv, su, sv, qu, qv, modes, FU, FV, px, py):
     return INPUT_OK
 
 
+@njit(cache=True, error_model="numpy")
+def load_pressure_voidage(eu, ev, FU, FV):
+    """The step input ``pressure_voidage`` (x-face, y-face arrays) into FU/FV[F_EP]; False if a value
+    lies outside (0, 1] (NaN included)."""
+    ok = True
+    for E, F in ((eu, FU), (ev, FV)):
+        EP = F[F_EP]
+        for i in range(E.shape[0]):
+            for j in range(E.shape[1]):
+                e = E[i, j]
+                if not (e > 0.0 and e <= 1.0):
+                    ok = False
+                EP[i, j] = e
+    return ok
+
+
 # ---------------------------------------------------------------------------- explicit terms
 @njit(cache=True, error_model="numpy", inline="always")
 def face_voidage(E, la, lb, ra, rb, kind, sign):
@@ -469,18 +487,21 @@ def _normalise_shares(F, K, area, total):
 
 
 @njit(cache=True, error_model="numpy")
-def _face_constants(C, F, K, gravity, idt):
+def _face_constants(C, F, K, gravity, idt, given):
     """Per step, on the faces of one direction: ε_f at t + dt (``face_voidage``), X1 = u_old/dt + g,
-    X2 = explicit terms + β u_s + source."""
+    X2 = explicit terms + β u_s + source; the pressure term's ε_p,f = ε_f unless ``given`` (then
+    F[F_EP] holds the step input ``pressure_voidage``)."""
     E = C[C_E]
     kind, sign = K[K_KIND], K[K_SIGN]
-    EF, X1, X2, old, ex, rhs = F[F_EF], F[F_X1], F[F_X2], F[F_OLD], F[F_EX], F[F_RHS]
+    EF, X1, X2, old, ex, rhs, EP = F[F_EF], F[F_X1], F[F_X2], F[F_OLD], F[F_EX], F[F_RHS], F[F_EP]
     da, db = face_axis(E, K)
     for i in range(kind.shape[0]):
         for j in range(kind.shape[1]):
             k = kind[i, j]
             la, lb, ra, rb = i + 1 - da, j + 1 - db, i + 1, j + 1
             EF[i, j] = face_voidage(E, la, lb, ra, rb, k, sign[i, j])
+            if not given:
+                EP[i, j] = EF[i, j]
             X1[i, j] = old[i, j] * idt + gravity
             X2[i, j] = ex[i, j] + rhs[i, j]
 
@@ -520,8 +541,9 @@ def begin_step(p, rho, u, v, eps_old, eps_new, U, V, G, H, C, FU, FV, KU, KV, fl
             E[i + 1, j + 1] = eps_new[i, j]
     boundary_cells(C, C[C_PFIX], flags, RULES, fpar, ipar)
     idt = 1.0 / fpar[F_DT]
-    _face_constants(C, FU, KU, fpar[F_GX], idt)
-    _face_constants(C, FV, KV, fpar[F_GY], idt)
+    given = ipar[I_PRESSURE_VOIDAGE] != 0
+    _face_constants(C, FU, KU, fpar[F_GX], idt, given)
+    _face_constants(C, FV, KV, fpar[F_GY], idt, given)
 
 
 @njit(cache=True, error_model="numpy")
@@ -565,7 +587,7 @@ def _face_fluxes(W, C, F, K, idt, ih, area):
     Returns whether there are outflow faces."""
     P, RHO = C[C_P], C[C_RHO]
     kind = K[K_KIND]
-    EF, X1, X2, beta, fix, FL = F[F_EF], F[F_X1], F[F_X2], F[F_BETA], F[F_FIX], F[F_FLUX]
+    EF, X1, X2, beta, fix, FL, EP = F[F_EF], F[F_X1], F[F_X2], F[F_BETA], F[F_FIX], F[F_FLUX], F[F_EP]
     has_outflow = False
     da, db = face_axis(P, K)
     n1, n2 = kind.shape[0], kind.shape[1]
@@ -580,7 +602,7 @@ def _face_fluxes(W, C, F, K, idt, ih, area):
                 ef = EF[i, j]
                 m = ef * rf
                 a = m * idt + beta[i, j]
-                w = (m * X1[i, j] + X2[i, j] - ef * (P[ra, rb] - P[la, lb]) * ih) / a
+                w = (m * X1[i, j] + X2[i, j] - EP[i, j] * (P[ra, rb] - P[la, lb]) * ih) / a
                 W[i + UI(2), j + UI(2)] = w
                 FL[i, j] = area * ef * rf * w
             elif k == FIXED:
@@ -735,7 +757,7 @@ def courant_number(U, V, fpar, ipar):
 def _assemble_faces(data, pos, W, C, F, K, area, h, comp, idt):
     """Face terms of the pressure matrix for one direction (see ``assemble_pressure``)."""
     RHO = C[C_RHO]
-    kind, EF, beta, X1 = K[K_KIND], F[F_EF], F[F_BETA], F[F_X1]
+    kind, EF, beta, X1, EP = K[K_KIND], F[F_EF], F[F_BETA], F[F_X1], F[F_EP]
     da, db = face_axis(RHO, K)
     half_comp = 0.5 * comp
     for i in range(kind.shape[0]):
@@ -748,13 +770,14 @@ def _assemble_faces(data, pos, W, C, F, K, area, h, comp, idt):
             ef = EF[i, j]
             rf = 0.5 * (RHO[la, lb] + RHO[ra, rb])
             base = area * ef * rf
-            d = ef / (ef * rf * idt + beta[i, j]) if k == SOLVED else 0.0  # D = ε_f / a
+            a = ef * rf * idt + beta[i, j]
+            d = EP[i, j] / a if k == SOLVED else 0.0  # D = ε_p,f / a
             c = base * d / h
             # d(flux)/dp of either cell through ρ_f = (ρ_L + ρ_R)/2, in the flux and (solved faces)
             # in the inertia (ερ)_f of the face velocity: du/dρ_f = ε_f ((u_old - u)/dt + g) / a
             t = area * ef * w * half_comp
             if k == SOLVED and comp != 0.0:
-                t += base * d * half_comp * (X1[i, j] - w * idt)
+                t += base * (ef / a) * half_comp * (X1[i, j] - w * idt)
             # flux out of L: (c + t) p'_L + (t - c) p'_R ; out of R: the negative
             p_ll, p_lr, p_rl, p_rr = pos[i, j, 0], pos[i, j, 1], pos[i, j, 2], pos[i, j, 3]
             if p_ll >= 0:

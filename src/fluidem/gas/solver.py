@@ -12,6 +12,10 @@ Equations (ε voidage, ρ gas density, u gas velocity (interstitial), v solids v
     ρ = p M/(RT)  (or a constant)                                       eq. 44
     τ_g = −[(λ_g − 2/3 μ_g)(∇·u) I + μ_g (∇u + ∇uᵀ)],  λ_g = 0          eq. 48
 
+The ε of −ε∇p is the face mean of the cells' (``face_voidage``) unless the step is given a
+``pressure_voidage`` per face: a coupling whose particles take −V_p∇p passes the voidage that makes
+the two pressure forces add up to −∇p V_f (``coupling.exchange``).
+
 Time step (semi-implicit, as Kuipers et al. 1992): convection (mass fluxes with face
 means of ε and ρ; upwind or TVD face velocities) and viscous stress are explicit;
 pressure, interphase drag and the density of inertia and gravity are implicit. Each
@@ -749,7 +753,7 @@ class GasSolver:
 
     # ------------------------------------------------------------ time step
     def advance(self, state: GasState, dt: float, t: float = 0.0, *, voidage=None, beta=None, solids_u=None,
-                solids_v=None, source_u=None, source_v=None) -> StepInfo:
+                solids_v=None, source_u=None, source_v=None, pressure_voidage=None) -> StepInfo:
         """Advance ``state`` in place from time ``t`` to ``t + dt`` [s].
 
         Parameters
@@ -771,6 +775,11 @@ class GasSolver:
         source_u, source_v : None, float, centre or face arrays
             Explicit momentum source added to the gas [N/m^3] (e.g. minus the drag handed
             to the particles when that is how the coupling is done).
+        pressure_voidage : None or (x-face array, y-face array)
+            The voidage ε_p,f of the pressure term −ε_p,f ∂p/∂x of eq. 43 on each face, in (0, 1];
+            None takes ε_f, the face value of ``voidage``. A coupling whose particles take −V_p ∇p
+            gives 1 − (their volume deposited on the face) / V_f, so that the gas loses exactly the
+            pressure force the particles gain (``coupling.exchange``).
 
         Returns
         -------
@@ -814,6 +823,8 @@ class GasSolver:
         modes[K.IN_SOLIDS_V], vs = self._input("solids_v", solids_v, sv, K.IN_SOLIDS_V)
         modes[K.IN_SOURCE_U], qu = self._input("source_u", source_u, su, K.IN_SOURCE_U)
         modes[K.IN_SOURCE_V], qv = self._input("source_v", source_v, sv, K.IN_SOURCE_V)
+        self._ipar[K.I_PRESSURE_VOIDAGE] = 0 if pressure_voidage is None else self._load_pressure_voidage(
+            pressure_voidage, su, sv)
         if self._time_dependent:  # prescribed pressures at t and t + dt, inflow velocities at t + dt
             if t != self._bc_time:
                 self._set_boundary_values(t)
@@ -848,6 +859,23 @@ class GasSolver:
         return StepInfo(iterations=int(ipar[K.I_ITER]), mass_residual=rel, converged=rel <= self.tolerance,
                         inflow_rate=o[K.O_IN], outflow_rate=o[K.O_OUT], mass=o[K.O_MASS],
                         mass_change_rate=o[K.O_ACC], courant=o[K.O_COURANT])
+
+    def _load_pressure_voidage(self, value, su, sv) -> int:
+        """Copy the (x-face, y-face) pair ``pressure_voidage`` into the face stacks; CaseError if wrong."""
+        if not (isinstance(value, (tuple, list)) and len(value) == 2):
+            raise CaseError("gas pressure_voidage: give a pair (x-face array, y-face array)")
+        eu, ev = value
+        if not (_ready(eu, su) and _ready(ev, sv)):
+            eu, ev = (np.ascontiguousarray(a, dtype=float) for a in value)
+            for k, (a, shape) in enumerate(((eu, su), (ev, sv))):
+                if a.shape != shape:
+                    raise CaseError(f"gas pressure_voidage[{k}]: shape {a.shape}, expected {shape}")
+        if not K.load_pressure_voidage(eu, ev, self.FU, self.FV):
+            both = np.concatenate([eu.ravel(), ev.ravel()])
+            bad = both[~((both > 0.0) & (both <= 1.0))]
+            raise CaseError(f"gas pressure_voidage: {bad.size} face values outside (0, 1], e.g. {float(bad[0])!r}; "
+                            "each must lie in (0, 1]")
+        return 1
 
     def _input(self, name, value, face_shape, slot, centre_ok=True):
         """(mode, array) of a step input for ``K.load_inputs``: K.IN_NONE, IN_SCALAR (the number in a

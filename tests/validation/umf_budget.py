@@ -9,7 +9,7 @@ load comes in impacts): the last two add up to 1 less the particles' mean accele
 ``--profile`` also prints the gas force over m g in layers of one diameter.
 
     python tests/validation/umf_budget.py [INFLOW_VOIDAGE] [MOMENTUM_EXCHANGE] [U] [--profile]
-        [--exchange-faces] [--no-pairing] [--extrapolate] [--wide]
+        [--exchange-faces] [--no-pairing] [--centre] [--wide] [--frozen]
 
 Measured 2026-11-22 (``python tests/validation/umf_budget.py 1.0 particle --profile``: inflow voidage 1,
 0.4 m/s, 0.35-0.65 s): Δp / (W/A) 0.952, gas force 0.933 m g, bottom wall 0.062 m g (touched in 75 %
@@ -56,19 +56,15 @@ from fluidem.case import validate_case  # noqa: E402
 from fluidem.simulation import Simulation  # noqa: E402
 
 
-def extrapolated(grid, p, height):
-    """Pressure drop with the inlet pressure extrapolated linearly from the first two rows of centres (the
-    analysis's reading before the thirteenth session; ``--extrapolate``)."""
+def from_first_centre(grid, p, height):
+    """Pressure drop from the first row of cell centres (width-averaged) to ``height`` (``--centre``)."""
     from fluidem.analysis.fluidised import pressure_at_heights
 
-    prof = np.asarray(p).mean(axis=0)
-    y0, y1 = grid.y_centres[:2]
-    inlet = prof[0] - y0 * (prof[1] - prof[0]) / (y1 - y0)
-    return float(inlet - pressure_at_heights(grid, p, [height])[0])
+    return float(np.asarray(p).mean(axis=0)[0] - pressure_at_heights(grid, p, [height])[0])
 
 
 def main(eps_in=1.0, exchange="particle", u=0.4, end=0.65, start=0.35, profile=False, faces="fold", pairing=True,
-         wide=False):
+         wide=False, update="substep"):
     if not wide:
         T.N, T.W, T.DEPTH = 2000, 20 * T.D, 5 * T.D  # the 20 x 5 d bed (5 x 15 cells of 4 d)
     c = T.sweep_case().model_dump(mode="json", exclude_none=True)
@@ -78,6 +74,7 @@ def main(eps_in=1.0, exchange="particle", u=0.4, end=0.65, start=0.35, profile=F
     c["coupling"]["momentum_exchange"] = exchange
     c["coupling"]["boundary_faces"] = faces
     c["coupling"]["pressure_pairing"] = pairing
+    c["coupling"]["drag_update"] = update
     c["time"]["end"] = end
     sim = Simulation(validate_case(c))
     chunk = int(round(0.005 / sim.dt))
@@ -87,30 +84,33 @@ def main(eps_in=1.0, exchange="particle", u=0.4, end=0.65, start=0.35, profile=F
     eng = sim.engine
     mg = st.mass * T.G
     layers = np.zeros((2, 60))  # Σ gas force, Σ m g per one-diameter layer
-    dp, fg, floor = [], [], []
+    dp, fg, floor, gas_side = [], [], [], []
     while sim.time < end - 1e-9:
         sim.step_once(chunk if sim.time <= start else sim.gas.substeps)  # every gas step in the window
         if sim.time > start:
             dp.append(pressure_drop(sim.gas.grid, sim.gas.state.p, T.H) - T.RHO * T.G * T.H)
             f = eng.external_force()[:, 1]
             fg.append(float(f.sum()))
+            b = sim.gas.exchange_balance()  # what the gas gave up in the step: drag, pressure force (y)
+            gas_side.append(float(b["gas"][1] - b.get("pressure_gas", [0.0, 0.0])[1]))
             floor.append(-float(wall_forces(eng)["box.ymin"][1]))
             k = np.clip((st.position[:, 1] / T.D).astype(int), 0, layers.shape[1] - 1)
             layers[0] += np.bincount(k, f, layers.shape[1])
             layers[1] += np.bincount(k, mg, layers.shape[1])
     print(f"inflow voidage {eps_in}, exchange {exchange}, boundary_faces {faces}, pressure_pairing {pairing}, {u} m/s: bed pressure drop / (W/A) = "
           f"{np.mean(dp) / wa:.4f}; gas force on particles / m g = {np.mean(fg) / weight:.4f}; "
-          f"bottom wall / m g = {np.mean(floor) / weight:.4f} (touched in {np.mean(np.array(floor) > 0):.0%} of the gas steps)")
+          f"bottom wall / m g = {np.mean(floor) / weight:.4f} (touched in {np.mean(np.array(floor) > 0):.0%} of the gas steps)"
+          f"; drag + pressure force the gas gave up / m g = {np.mean(gas_side) / weight:.4f}")
     if profile:
         for k in np.flatnonzero(layers[1]):
             print(f"  {k:2d}-{k + 1:2d} d: gas force / m g = {layers[0, k] / layers[1, k]:.3f}")
 
 
 if __name__ == "__main__":
-    if "--extrapolate" in sys.argv:
-        pressure_drop = extrapolated  # noqa: F811 (main reads the module's name)
+    if "--centre" in sys.argv:
+        pressure_drop = from_first_centre  # noqa: F811 (main reads the module's name)
     args = [a for a in sys.argv[1:] if not a.startswith("--")]
     main(float(args[0]) if args else 1.0, args[1] if len(args) > 1 else "particle",
          float(args[2]) if len(args) > 2 else 0.4, profile="--profile" in sys.argv,
          faces="exchange" if "--exchange-faces" in sys.argv else "fold", pairing="--no-pairing" not in sys.argv,
-         wide="--wide" in sys.argv)
+         wide="--wide" in sys.argv, update="frozen" if "--frozen" in sys.argv else "substep")

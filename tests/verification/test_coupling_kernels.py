@@ -343,7 +343,7 @@ def test_paired_kernels_give_the_same_bits_on_any_number_of_threads(all_threads,
         pv = [np.zeros(gd.u_shape), np.zeros(gd.v_shape)]
         bad = P.deposit(cpl.drag.code, st.position, st.velocity, st.radius, cpl.volume, gs.u, gs.v, gs.voidage,
                         gs.rho, cpl.solver.props.viscosity, gd.dx, gd.dy, 0.0, *cpl._periodic, kp, *sums, kc,
-                        gd.cell_volume, *face, True, *pv, parallel)
+                        gd.cell_volume, *cpl._face_volumes, *face, True, *pv, parallel)
         return bad, [kp, kc, *sums, *face, *pv]
 
     def split(kp, parallel):

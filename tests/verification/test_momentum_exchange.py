@@ -23,6 +23,7 @@ import pytest
 
 import fluidem as fd
 from fluidem.case import validate_case
+from fluidem.coupling.drag import drag_laws
 from fluidem.coupling.exchange import GasCoupling
 from fluidem.gas.solver import GasState
 from fluidem.gas import _solver_kernels as SK
@@ -208,3 +209,47 @@ def test_paired_interpolation_reproduces_linear_fields_and_wraps_periodic_sides(
     vy = v[:, 1] + 0.5 * (v[:, 2] - v[:, 1])  # y = 1.5 dy lies halfway between faces 1 and 2
     assert out[0, 1] == pytest.approx(0.5 * (vy[0] + vy[-1]), rel=1e-13)
     assert out[1, 1] == pytest.approx(0.75 * vy[0] + 0.25 * vy[-1], rel=1e-13)
+
+
+@pytest.mark.parametrize("periodic_x", [False, True])
+def test_a_uniform_bed_gives_every_face_the_same_beta_and_pressure_voidage(periodic_x):
+    """Folded boundary faces with the face volumes of ``face_volumes``: a lattice of equal particles filling
+    the domain evenly (4 × 4 per cell, the same gas everywhere) gives every face the same β = Σ w K_p / V_f
+    and ε_p = 1 − Σ w V_p / V_f, the first interior faces (which take the half cell along the boundary, 1.5
+    cells of particles over 1.5 V_cell) as the inner ones. Dividing by V_cell there instead gave 1.5 × β
+    and, in a packed bed, ε_p clipped at the minimum (the pressure force then no longer paired)."""
+    from fluidem.coupling import _paired_kernels as P
+
+    nx, ny, dx, depth, d = 4, 6, 0.01, 0.004, 2.4e-3  # solids fraction 0.29
+    h = dx / 4
+    x, y = np.meshgrid((np.arange(4 * nx) + 0.5) * h, (np.arange(4 * ny) + 0.5) * h, indexing="ij")
+    n = x.size
+    pos = np.column_stack([x.ravel(), y.ravel(), np.full(n, 0.5 * depth)])
+    radius, volume = np.full(n, 0.5 * d), np.full(n, np.pi / 6 * d**3)
+    vol = dx * dx * depth
+    periodic = (periodic_x, False)
+    vu, vv = P.face_volumes((nx, ny), periodic, vol)
+    assert vv[0, 1] == vv[0, ny - 1] == 1.5 * vol and vv[0, 2] == vol
+    assert (vu[1, 0] == 1.5 * vol) != periodic_x
+    faces = [np.zeros((nx + 1, ny)), np.zeros((nx + 1, ny)), np.zeros((nx, ny + 1)), np.zeros((nx, ny + 1))]
+    coeff = [np.zeros((nx + 1, ny)), np.zeros((nx + 1, ny)), np.zeros((nx, ny + 1)), np.zeros((nx, ny + 1))]
+    eu, ev = np.zeros((nx + 1, ny)), np.zeros((nx, ny + 1))
+    kp = np.zeros(n)
+    code = drag_laws.get("gidaspow")().code
+    vel = np.zeros((n, 3))
+    bad = P.deposit(code, pos, vel, radius, volume, np.full((nx + 1, ny), 0.3), np.full((nx, ny + 1), 0.5),
+                    np.full((nx, ny), 0.6), np.full((nx, ny), 1.2), 1.8e-5, dx, dx, 0.3, *periodic, kp, *faces,
+                    np.zeros((nx, ny)), vol, vu, vv, coeff[0], coeff[1], coeff[2], coeff[3], True, eu, ev, False)
+    assert bad == 0
+    beta_u, beta_v = coeff[0], coeff[2]
+    inner_u = slice(0, nx) if periodic_x else slice(1, nx)  # faces that carry particles (face nx is face 0)
+    want_eps = 1.0 - 16 * volume[0] / vol
+    np.testing.assert_allclose(ev[:, 1:ny], want_eps, rtol=1e-12)
+    np.testing.assert_allclose(eu[inner_u], want_eps, rtol=1e-12)
+    np.testing.assert_allclose(beta_v[:, 1:ny], beta_v[0, 2], rtol=1e-12)
+    np.testing.assert_allclose(beta_u[inner_u], beta_v[0, 2], rtol=1e-12)
+    assert np.all(beta_v[:, [0, ny]] == 0.0) and np.all(ev[:, [0, ny]] == 1.0)  # nothing on the boundary faces
+    eu2, ev2 = np.zeros_like(eu), np.zeros_like(ev)
+    P.pressure_voidage(pos, volume, dx, dx, *periodic, vu, vv, 0.3, eu2, ev2)
+    np.testing.assert_array_equal(eu2, eu)
+    np.testing.assert_array_equal(ev2, ev)

@@ -74,21 +74,21 @@ def gas_force(engine) -> np.ndarray:
 
 
 def pressure_at_heights(grid, p: np.ndarray, heights) -> np.ndarray:
-    """Width-averaged pressure [Pa] at the given heights, linear in y between cell-centre rows.
+    """Width-averaged pressure [Pa] at the given heights, linear in y between cell-centre rows and
+    extrapolated linearly below the first and above the last row.
 
-    Below the first row of centres the pressure is that row's: the gas momentum is solved on the
-    faces between centres, so no force of the model acts between the bottom boundary and the first
-    centre (the particles there hand their drag and pressure force to the first interior faces,
-    ``coupling.boundary_faces = "fold"``); only the gas's own weight over that half cell, ρ g dy/2
-    (0.1 Pa in ``tsuji-jet``), is left out. Extrapolating the first rows' gradient down to the
-    inflow counted the lowest particles' weight twice (the u_mf sweep's plateau 4 % above W/A with
-    the fold, issue 4). Above the last centre: linear extrapolation."""
+    The extrapolation to the inflow is the coupled model's own inlet pressure: the half cell below
+    the first centre belongs to the first interior face's momentum control volume
+    (``coupling.boundary_faces = "fold"``, ``_paired_kernels.face_volumes``), across which the
+    pressure falls with that face's gradient."""
     yc = grid.y_centres
     prof = np.asarray(p, float).mean(axis=0)
     h = np.atleast_1d(np.asarray(heights, float))
-    out = np.interp(h, yc, prof)  # clamps below the first and above the last centre
-    hi = h > yc[-1]
+    out = np.interp(h, yc, prof)
+    # np.interp clamps; extrapolate linearly below the first and above the last centre
+    lo, hi = h < yc[0], h > yc[-1]
     if yc.size > 1:
+        out[lo] = prof[0] + (h[lo] - yc[0]) * (prof[1] - prof[0]) / (yc[1] - yc[0])
         out[hi] = prof[-1] + (h[hi] - yc[-1]) * (prof[-1] - prof[-2]) / (yc[-1] - yc[-2])
     return out
 

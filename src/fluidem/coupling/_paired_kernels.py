@@ -196,7 +196,7 @@ def _scatter(A, B, i0, i1, a0, a1, j0, j1, b0, b1, k, vel):
 
 @njit(cache=True, error_model="numpy")
 def deposit(code, position, velocity, radius, volume, u, v, voidage, rho, mu, dx, dy, min_voidage, px, py, kp,
-            AU, BU, AV, BV, KC, vol, beta_u, su, beta_v, sv, fold, EU, EV, parallel=False):
+            AU, BU, AV, BV, KC, vol, VU, VV, beta_u, su, beta_v, sv, fold, EU, EV, parallel=False):
     """K_p and the face sums of the ``particle`` mode (module docstring); returns the number of
     particles whose drag arguments are out of range (their K_p is NaN, nothing deposited).
 
@@ -204,8 +204,9 @@ def deposit(code, position, velocity, radius, volume, u, v, voidage, rho, mu, dx
     v, AV, BV : (nx, ny + 1); voidage (ε at the end of the gas step, clipped to
     [min_voidage, 1] at the particle), rho, KC : (nx, ny). A*, B* are overwritten; KC[i, j] becomes
     Σ K_p over the particles whose centre lies in cell (i, j) (for output: Sun 2007 eq. 33's cell β
-    times V_cell). What the gas takes (vol = V_cell): beta_u = AU / vol, su = BU / AU (0 where AU = 0),
-    and the same on the y-faces. ``fold``: boundary faces folded (``_face_axis``).
+    times V_cell). What the gas takes: beta_u = AU / V_f, su = BU / AU (0 where AU = 0), and the same on
+    the y-faces, with V_f = vol (V_cell) or, with ``fold`` (boundary faces folded, ``_face_axis``), the
+    face volumes VU (nx + 1, ny), VV (nx, ny + 1) of ``face_volumes``.
 
     EU (nx + 1, ny), EV (nx, ny + 1), or both (0, 0) for none: the pressure term's face voidage
     (``pressure_voidage``), deposited in the same pass.
@@ -252,11 +253,11 @@ def deposit(code, position, velocity, radius, volume, u, v, voidage, rho, mu, dx
         KC[U(ic), U(jc)] += k
         _scatter(AU, BU, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, k, velocity[q, U(0)])
         _scatter(AV, BV, ci0, ci1, cw0, cw1, fj0, fj1, fv0, fv1, k, velocity[q, U(1)])
-    _face_coefficients(AU, BU, vol, beta_u, su)
-    _face_coefficients(AV, BV, vol, beta_v, sv)
+    _face_coefficients(AU, BU, vol, VU, fold, beta_u, su)
+    _face_coefficients(AV, BV, vol, VV, fold, beta_v, sv)
     if solids:
-        _face_voidage(EU, vol, min_voidage)
-        _face_voidage(EV, vol, min_voidage)
+        _face_voidage(EU, VU, min_voidage)
+        _face_voidage(EV, VV, min_voidage)
     return bad
 
 
@@ -307,12 +308,13 @@ def _kp_parallel(code, position, velocity, radius, volume, u, v, voidage, rho, m
 
 
 @njit(cache=True, error_model="numpy")
-def _face_coefficients(A, B, vol, beta, solids):
-    """beta = A / vol, solids = B / A (0 where A = 0): the face β and u_s the gas takes."""
+def _face_coefficients(A, B, vol, VF, per_face, beta, solids):
+    """beta = A / V_f (VF[i, j] if ``per_face``, else vol), solids = B / A (0 where A = 0): the face β and
+    u_s the gas takes."""
     for i in range(A.shape[0]):
         for j in range(A.shape[1]):
             a = A[i, j]
-            beta[i, j] = a / vol
+            beta[i, j] = a / (VF[i, j] if per_face else vol)
             solids[i, j] = B[i, j] / a if a > 0.0 else 0.0
 
 
@@ -326,18 +328,19 @@ def _add(E, i0, i1, a0, a1, j0, j1, b0, b1, k):
 
 
 @njit(cache=True, error_model="numpy")
-def _face_voidage(E, vol, min_voidage):
-    """E (the particle volume on each face) → max(1 − E / vol, min_voidage): ``pressure_voidage``."""
+def _face_voidage(E, VF, min_voidage):
+    """E (the particle volume on each face) → max(1 − E / V_f, min_voidage): ``pressure_voidage``."""
     for i in range(E.shape[0]):
         for j in range(E.shape[1]):
-            E[i, j] = max(1.0 - E[i, j] / vol, min_voidage)
+            E[i, j] = max(1.0 - E[i, j] / VF[i, j], min_voidage)
 
 
 @njit(cache=True, error_model="numpy")
-def pressure_voidage(position, volume, dx, dy, px, py, vol, min_voidage, EU, EV):
+def pressure_voidage(position, volume, dx, dy, px, py, VU, VV, min_voidage, EU, EV):
     """The voidage of the gas's pressure term −ε_p,f ∂p/∂x that pairs the particles' −V_p ∇p_p:
     ε_p,f = 1 − Σ_p w_pf V_p / V_f with the weights w_pf by which ∇p is interpolated to particle p
-    (``_gradient_at``: boundary faces folded), clipped below at ``min_voidage``.
+    (``_gradient_at``: boundary faces folded) and the face volumes V_f of ``face_volumes`` (VU, VV),
+    clipped below at ``min_voidage``.
 
     Then Σ_f (1 − ε_p,f) V_f ∂p/∂x|_f = Σ_p V_p ∂p/∂x|_p: the gas (−ε_p,f ∇p) and the particles
     (−V_p ∇p, Sun 2007 eq. 28) together feel −∇p V_f on each face, as the mixture must, so the
@@ -355,8 +358,35 @@ def pressure_voidage(position, volume, dx, dy, px, py, vol, min_voidage, EU, EV)
          fv1) = _stencil(position[q, U(0)], position[q, U(1)], idx, idy, nx, ny, px, py, True)
         _add(EU, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, volume[q])
         _add(EV, ci0, ci1, cw0, cw1, fj0, fj1, fv0, fv1, volume[q])
-    _face_voidage(EU, vol, min_voidage)
-    _face_voidage(EV, vol, min_voidage)
+    _face_voidage(EU, VU, min_voidage)
+    _face_voidage(EV, VV, min_voidage)
+
+
+def face_volumes(n, periodic, vol):
+    """(nx + 1, ny) x-face and (nx, ny + 1) y-face control volumes [m³] for folded weights (not compiled).
+
+    n = (nx, ny), periodic = (px, py), vol = V_cell. A face's momentum control volume reaches from the
+    centre before it to the centre after it (V_cell); along a non-periodic axis of two cells or more the
+    half cell between the boundary face and the first centre has none of its own, and folding hands its
+    particles to the first interior face (``_face_axis``), so that face's volume counts it too: 1.5 V_cell
+    (2 V_cell for the one interior face of a two-cell axis). With it a face's β = Σ w K_p / V_f and solids
+    fraction Σ w V_p / V_f are those of the region its particles come from (a uniform bed gives the same
+    values on every face), and the pressure at the boundary is the first face's gradient extrapolated over
+    that half cell (``analysis.fluidised.pressure_at_heights``)."""
+    nx, ny = n
+    out = []
+    for shape, axis in (((nx + 1, ny), 0), ((nx, ny + 1), 1)):
+        f = np.ones(shape)
+        m = n[axis]
+        if not periodic[axis] and m >= 2:
+            lo = [slice(None), slice(None)]
+            lo[axis] = 1
+            hi = list(lo)
+            hi[axis] = m - 1
+            f[tuple(lo)] += 0.5
+            f[tuple(hi)] += 0.5
+        out.append(f * vol)
+    return out[0], out[1]
 
 
 @njit(cache=True, inline="always")

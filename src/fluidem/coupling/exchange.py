@@ -111,6 +111,8 @@ class GasCoupling:
         self._pair_pressure = (bool(self.options.pressure_pairing) and bool(self.options.pressure_gradient_force)
                                and self.exchange in ("particle", "cell"))
         self._pressure_voidage = (np.ones(gd.u_shape), np.ones(gd.v_shape))
+        # face control volumes with the boundary half cells counted in the first interior faces
+        self._face_volumes = P.face_volumes(gd.shape, self._periodic, gd.cell_volume)
         self._no_faces = np.zeros((0, 0))
         if hasattr(engine, "reorder_listeners"):  # per-particle arrays here follow the engine's renumbering
             engine.reorder_listeners.append(self._reorder)
@@ -248,7 +250,7 @@ class GasCoupling:
             pv = self._pressure_voidage
             if self.exchange != "particle":  # "particle": ``_deposit`` has filled them
                 st = self._particles()
-                P.pressure_voidage(st.position, self.volume, gd.dx, gd.dy, *self._periodic, gd.cell_volume,
+                P.pressure_voidage(st.position, self.volume, gd.dx, gd.dy, *self._periodic, *self._face_volumes,
                                    self.mapping.minimum_voidage, *pv)
         self.last_info = self.solver.advance(self.state, self.gas_dt, t, voidage=smap.voidage, beta=beta,
                                              solids_u=us, solids_v=vs, pressure_voidage=pv)
@@ -267,7 +269,7 @@ class GasCoupling:
         bad = P.deposit(self.drag.code, st.position, st.velocity, st.radius, self.volume, gs.u, gs.v, voidage,
                         gs.rho, self.solver.props.viscosity, gd.dx, gd.dy, self.mapping.minimum_voidage,
                         *self._periodic, self._kp, au, bu_, av, bv_, self._kp_cells, gd.cell_volume,
-                        self._face_beta[0], self._face_solids[0], self._face_beta[1], self._face_solids[1],
+                        *self._face_volumes, self._face_beta[0], self._face_solids[0], self._face_beta[1], self._face_solids[1],
                         self._fold, *(self._pressure_voidage if self._pair_pressure else (self._no_faces,) * 2),
                         numba.get_num_threads() > 1)
         if bad:
@@ -313,9 +315,9 @@ class GasCoupling:
         inflow: exchanged with the boundary), ``particles`` Σ_p of the particle drag (without −V_p ∇p).
         For ``"particle"`` and ``"cell"`` gas + boundary = particles to round-off, at the end of the
         gas step (before the DEM sub-steps move the particles). With ``pressure_pairing`` also
-        ``pressure_gas``, Σ over the solved faces of (1 − ε_p,f) V_f ∇p_f (the pressure force the gas
-        gives up against a gas of voidage 1), and ``pressure_particles``, Σ_p V_p ∇p_p: equal to
-        round-off."""
+        ``pressure_gas``, Σ over the solved faces of (1 − ε_p,f) V_f ∇p_f (V_f of
+        ``_paired_kernels.face_volumes``; the pressure force the gas gives up against a gas of voidage 1),
+        and ``pressure_particles``, Σ_p V_p ∇p_p: equal to round-off."""
         gd, gs = self.grid, self.state
         if self.last_beta is None:
             raise RuntimeError("exchange_balance: no gas step taken yet")
@@ -329,9 +331,9 @@ class GasCoupling:
             bu, bv = np.empty(gd.u_shape), np.empty(gd.v_shape)
             SK.centre_to_x_faces(beta, self._periodic[0], bu)
             SK.centre_to_y_faces(beta, self._periodic[1], bv)
-        if self.exchange == "particle":
+        if self.exchange == "particle":  # V_f (β_f u − β_f u_s,f) = A_f u − B_f whatever the face volumes
             au, bu_, av, bv_ = self._faces
-            mu, mv = bu_ / gd.cell_volume, bv_ / gd.cell_volume  # β u_s on the faces
+            fu, fv = au * gs.u - bu_, av * gs.v - bv_
         else:
             smap = self.last_map
             if self.exchange == "cell":
@@ -340,9 +342,8 @@ class GasCoupling:
                 su, sv = np.empty(gd.u_shape), np.empty(gd.v_shape)
                 SK.centre_to_x_faces(smap.solids_u, self._periodic[0], su)
                 SK.centre_to_y_faces(smap.solids_v, self._periodic[1], sv)
-            mu, mv = bu * su, bv * sv
-        fu = gd.cell_volume * (bu * gs.u - mu)
-        fv = gd.cell_volume * (bv * gs.v - mv)
+            fu = gd.cell_volume * (bu * gs.u - bu * su)
+            fv = gd.cell_volume * (bv * gs.v - bv * sv)
         solved_u = self.solver.ukind == SK.SOLVED
         solved_v = self.solver.vkind == SK.SOLVED
         copy_u = self.solver.ukind == SK.COPY
@@ -356,8 +357,9 @@ class GasCoupling:
             out["pressure_particles"] = (drag - both)[:, :2].sum(axis=0)  # Σ_p V_p ∇p_p
             gx, gy = self._face_gradients()
             eu, ev = self._pressure_voidage
-            out["pressure_gas"] = gd.cell_volume * np.array([((1.0 - eu) * gx)[solved_u].sum(),
-                                                             ((1.0 - ev) * gy)[solved_v].sum()])
+            vu, vv = self._face_volumes
+            out["pressure_gas"] = np.array([((1.0 - eu) * vu * gx)[solved_u].sum(),
+                                            ((1.0 - ev) * vv * gy)[solved_v].sum()])
         return out
 
     def _face_gradients(self):

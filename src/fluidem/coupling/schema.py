@@ -24,7 +24,7 @@ share at the step's start, so only ``"frozen"`` pairs the two sides exactly.
 ``boundary_faces`` (``"particle"`` exchange): a face the gas does not solve (a wall's or an
 inflow's) has no momentum control volume; with ``"fold"`` (default) a particle in the half cell
 along it takes the gas velocity of the first interior face and hands its drag to the gas there
-(the interior face's control volume stands for the half cell, as ∇p is interpolated), with
+(that face's control volume takes in the half cell, 1.5 cells, as ∇p is interpolated), with
 ``"exchange"`` it interpolates towards the boundary's velocity and the drag on the boundary
 face is momentum exchanged with the boundary: the gas pressure then does not carry the
 weight that particles near an inflow put there (the fluidised bed's pressure drop was 4-5 %

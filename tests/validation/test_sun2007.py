@@ -24,7 +24,11 @@ after a round-off change: 9.23-9.26 cm, 0.303-0.308, 0.216-0.219; the same seed-
 0.58 and multicontact ratio 0.45 (5–10 s; 0.61 and 0.46 with the former gas step of 1e-4 s), below Sun's
 1.2 and 0.6 — the strict xfail below keeps that disagreement visible; tsuji-jet-closed 1.35 and 0.66
 (1.36 and 0.67 with 1e-4 s).
-Each run takes 5–15 minutes on this 2-core machine.
+Fourteenth session (2026-11-26), with the boundary faces folded and the pressure force paired
+(``coupling.boundary_faces``, ``pressure_pairing``): goldschmidt 9.39 cm, 0.314, 0.212; tsuji-jet 18.6 cm,
+0.576, 0.443; tsuji-jet-closed 14.2 cm, 1.42, 0.68 (``NUMBA_NUM_THREADS=1 python -m pytest -m validation
+tests/validation/test_sun2007.py -s``, 11.5 min).
+Each run takes 2–15 minutes on this 2-core machine.
 """
 import json
 

@@ -31,8 +31,9 @@ weight that particles near an inflow put there (the fluidised bed's pressure dro
 below its weight over area, issue 4). ``pressure_pairing`` (default true, with
 ``pressure_gradient_force``): the gas's −ε∇p takes on each face the voidage 1 − Σ_p w_pf V_p / V_f
 (``_paired_kernels.pressure_voidage``) instead of the mean of the mapped cell voidages, so that
-the pressure force is exchanged as exactly as the drag; false keeps the mapped voidage (as MFIX,
-where gas and particle pressure forces agree only up to the mapping).
+the pressure force is exchanged as exactly as the drag (exactly with ``"fold"``: with ``"exchange"`` the
+gas does not give up the pressure force of the particles in the boundary half cells); false keeps the
+mapped voidage (as MFIX, where gas and particle pressure forces agree only up to the mapping).
 
 Example (TOML)::
 

@@ -70,13 +70,13 @@ def test_drag_the_gas_loses_is_the_drag_the_particles_gain(exchange, faces, mapp
         assert np.abs(b["boundary"]).max() > 1e-6 * scale, b
 
 
-@pytest.mark.parametrize("exchange", ["particle", "cell"])
+@pytest.mark.parametrize("exchange,faces", [("particle", "fold"), ("particle", "exchange"), ("cell", "fold")])
 @pytest.mark.parametrize("mapping", ["centroid-volume", "area-volume"])
-def test_pressure_force_the_gas_gives_up_is_what_the_particles_gain(exchange, mapping):
+def test_pressure_force_the_gas_gives_up_is_what_the_particles_gain(exchange, faces, mapping):
     """``pressure_pairing``: Σ_f (1 − ε_p,f) V_f ∇p_f = Σ_p V_p ∇p_p (what the gas's −ε_p,f ∇p leaves of the
     mixture's −∇p is the particles' −V_p ∇p) to round-off, on a random pressure field; the voidage the
     gas takes otherwise (the mean of the mapped cells) misses by percents on the same field."""
-    cpl = tsuji_coupling(exchange, mapping)
+    cpl = tsuji_coupling(exchange, mapping, boundary_faces=faces)
     cpl.gas_step()
     rng = np.random.default_rng(11)
     cpl.state.p[...] = 1.013e5 + rng.normal(0.0, 200.0, cpl.grid.shape)  # a field with gradients everywhere

@@ -237,14 +237,14 @@ def deposit(code, position, velocity, radius, volume, u, v, voidage, rho, mu, dx
         (ci0, ci1, cw0, cw1, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, fj0, fj1, fv0,
          fv1) = _stencil(x, y, idx, idy, nx, ny, px, py, fold)
         if solids:  # V_p on the faces of its ∇p interpolation (always folded: ``_face_gradient``)
-            if not fold:
-                fi0, fi1, fw0, fw1 = _face_axis(x, idx, nx, px, True)
-                fj0, fj1, fv0, fv1 = _face_axis(y, idy, ny, py, True)
-            _add(EU, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, volume[q])
-            _add(EV, ci0, ci1, cw0, cw1, fj0, fj1, fv0, fv1, volume[q])
-            if not fold:
-                fi0, fi1, fw0, fw1 = _face_axis(x, idx, nx, px, False)
-                fj0, fj1, fv0, fv1 = _face_axis(y, idy, ny, py, False)
+            if fold:
+                _add(EU, fi0, fi1, fw0, fw1, cj0, cj1, cv0, cv1, volume[q])
+                _add(EV, ci0, ci1, cw0, cw1, fj0, fj1, fv0, fv1, volume[q])
+            else:
+                gi0, gi1, gw0, gw1 = _face_axis(x, idx, nx, px, True)
+                gj0, gj1, gv0, gv1 = _face_axis(y, idy, ny, py, True)
+                _add(EU, gi0, gi1, gw0, gw1, cj0, cj1, cv0, cv1, volume[q])
+                _add(EV, ci0, ci1, cw0, cw1, gj0, gj1, gv0, gv1, volume[q])
         if not valid[q]:
             continue
         ic = min(max(int(x / dx), 0), nx - 1)

@@ -51,8 +51,8 @@ def main(argv):
         for k, v in wall_forces(sim.engine).items():
             walls.setdefault(k, []).append(-float(v[1]))
     rate = (float((sim.state.mass * sim.state.velocity[:, 1]).sum()) - p0) / (sim.time - t0)
-    print(f"{name} {over}: d(Σ m v)/dt / W = {rate / weight:.4f}, Δp A / W = {np.mean(dp) * area / weight:.4f}, gas force / W = {np.mean(force) / weight:.4f}, "
-          f"gas gave up / W = {np.mean(gave) / weight:.4f}; walls / W: "
+    print(f"{name} {over}: d(Σ m v)/dt / W = {rate / weight:.4f}, Δp A / W = {np.mean(dp) * area / weight:.4f}, "
+          f"gas force / W = {np.mean(force) / weight:.4f}, gas gave up / W = {np.mean(gave) / weight:.4f}; walls / W: "
           + ", ".join(f"{k} {np.mean(v) / weight:.4f}" for k, v in walls.items()))
 
 

@@ -89,8 +89,9 @@ def sweep():
     print(f"\nW/A = {weight:.2f} Pa, plateau {result['plateau_Pa']:.2f} Pa, u_mf = {result['umf']:.4f} m/s, "
           f"Wen-Yu {wen_yu_umf(D, RHO_P, RHO, MU, G):.4f} m/s")
     ua, ra = np.array(u), np.array(dp) / weight
+    bins = np.arange(0.0, U_MAX, 0.05)
     print("Δp / (W/A) by superficial velocity: " + ", ".join(
-        f"{lo:.2f}-{lo + 0.05:.2f} m/s {ra[(ua > lo) & (ua <= lo + 0.05)].mean():.3f}" for lo in np.arange(0.0, U_MAX, 0.05)))
+        f"{lo:.2f}-{lo + 0.05:.2f} m/s {ra[(ua > lo) & (ua <= lo + 0.05)].mean():.3f}" for lo in bins))
     return weight, result
 
 

@@ -106,10 +106,12 @@ def main(eps_in=1.0, exchange="particle", u=0.4, end=0.65, start=0.35, profile=F
             k = np.clip((st.position[:, 1] / T.D).astype(int), 0, layers.shape[1] - 1)
             layers[0] += np.bincount(k, f, layers.shape[1])
             layers[1] += np.bincount(k, mg, layers.shape[1])
-    print(f"inflow voidage {eps_in}, exchange {exchange}, boundary_faces {faces}, pressure_pairing {pairing}, {u} m/s: bed pressure drop / (W/A) = "
-          f"{np.mean(dp) / wa:.4f}; gas force on particles / m g = {np.mean(fg) / weight:.4f}; "
-          f"bottom wall / m g = {np.mean(floor) / weight:.4f} (touched in {np.mean(np.array(floor) > 0):.0%} of the gas steps)"
-          f"; drag + pressure force the gas gave up / m g = {np.mean(gas_side) / weight:.4f}")
+    touched = np.mean(np.array(floor) > 0)
+    print(f"inflow voidage {eps_in}, exchange {exchange}, boundary_faces {faces}, pressure_pairing {pairing}, "
+          f"{u} m/s: bed pressure drop / (W/A) = {np.mean(dp) / wa:.4f}; "
+          f"gas force on particles / m g = {np.mean(fg) / weight:.4f}; "
+          f"bottom wall / m g = {np.mean(floor) / weight:.4f} (touched in {touched:.0%} of the gas steps); "
+          f"drag + pressure force the gas gave up / m g = {np.mean(gas_side) / weight:.4f}")
     if profile:
         for k in np.flatnonzero(layers[1]):
             print(f"  {k:2d}-{k + 1:2d} d: gas force / m g = {layers[0, k] / layers[1, k]:.3f}")

@@ -85,6 +85,21 @@ def test_pressure_gradient_linear_and_quadratic():
     np.testing.assert_allclose(gx, 0.0, atol=1e-9)
 
 
+def test_pressure_gradient_across_a_periodic_side():
+    """Periodic x: both side faces take the difference of the two edge cells the side joins (a cosine over the
+    width: its centred difference there), the y side faces still copy their interior neighbours."""
+    width = GRID.nx * GRID.dx
+    q = field("centre", lambda x, y: 1e5 + 50.0 * np.cos(2 * np.pi * x / width) - 9000.0 * y)
+    gx, gy = I.pressure_gradient(GRID, q, "copy", (True, False))
+    side = (q[0] - q[-1]) / GRID.dx
+    np.testing.assert_array_equal(gx[0], side)
+    np.testing.assert_array_equal(gx[-1], side)
+    xf = GRID.dx * np.arange(GRID.nx + 1)  # centred difference of the cosine at each face, x = 0 ≡ width
+    want = -50.0 * 2 * np.pi / width * np.sin(2 * np.pi * xf / width) * np.sinc(GRID.dx / width)
+    np.testing.assert_allclose(gx[:, 0], want, atol=1e-9 * 50.0 / GRID.dx)
+    np.testing.assert_allclose(gy, -9000.0, rtol=1e-9)
+
+
 def test_sample_gas_state():
     pos = positions(50)
     st = GasState(p=field("centre", lambda x, y: 1e5 - 100 * y), rho=np.ones(GRID.shape),

@@ -269,7 +269,8 @@ class GasCoupling:
         bad = P.deposit(self.drag.code, st.position, st.velocity, st.radius, self.volume, gs.u, gs.v, voidage,
                         gs.rho, self.solver.props.viscosity, gd.dx, gd.dy, self.mapping.minimum_voidage,
                         *self._periodic, self._kp, au, bu_, av, bv_, self._kp_cells, gd.cell_volume,
-                        *self._face_volumes, self._face_beta[0], self._face_solids[0], self._face_beta[1], self._face_solids[1],
+                        *self._face_volumes, self._face_beta[0], self._face_solids[0], self._face_beta[1],
+                        self._face_solids[1],
                         self._fold, *(self._pressure_voidage if self._pair_pressure else (self._no_faces,) * 2),
                         numba.get_num_threads() > 1)
         if bad:
@@ -355,29 +356,12 @@ class GasCoupling:
             both = np.zeros((n, 3))
             self._forces(both, np.empty((0, 3)), pressure=True)
             out["pressure_particles"] = (drag - both)[:, :2].sum(axis=0)  # Σ_p V_p ∇p_p
-            gx, gy = self._face_gradients()
+            gx, gy = I.pressure_gradient(gd, gs.p, "copy", self._periodic)  # as ``_paired_kernels`` takes it
             eu, ev = self._pressure_voidage
             vu, vv = self._face_volumes
             out["pressure_gas"] = np.array([((1.0 - eu) * vu * gx)[solved_u].sum(),
                                             ((1.0 - ev) * vv * gy)[solved_v].sum()])
         return out
-
-    def _face_gradients(self):
-        """∂p/∂x on the x-faces and ∂p/∂y on the y-faces [Pa/m] as the particles' ∇p interpolation takes
-        them (``_paired_kernels._face_gradient``: a boundary face copies its interior neighbour)."""
-        p, gd = self.state.p, self.grid
-        out = []
-        for q, d, periodic in ((p, gd.dx, self._periodic[0]), (p.T, gd.dy, self._periodic[1])):
-            n = q.shape[0]
-            g = np.zeros((n + 1, q.shape[1]))
-            if n >= 2:
-                g[1:n] = np.diff(q, axis=0) / d
-                if periodic:
-                    g[0] = g[n] = (q[0] - q[n - 1]) / d
-                else:
-                    g[0], g[n] = g[1], g[n - 1]
-            out.append(g)
-        return out[0], np.ascontiguousarray(out[1].T)
 
     # ------------------------------------------------------------ stepping
     def advance(self, nsteps: int) -> None:

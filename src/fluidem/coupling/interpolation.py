@@ -104,12 +104,14 @@ def weights(grid: StaggeredGrid, position, location: str = "centre"):
     return index, w
 
 
-def pressure_gradient(grid: StaggeredGrid, p, boundary: str = "copy") -> tuple[np.ndarray, np.ndarray]:
+def pressure_gradient(grid: StaggeredGrid, p, boundary: str = "copy",
+                      periodic=(False, False)) -> tuple[np.ndarray, np.ndarray]:
     """(∂p/∂x on x-faces (nx + 1, ny), ∂p/∂y on y-faces (nx, ny + 1)) [Pa/m].
 
     Interior faces: centred differences of neighbouring centres (exact for quadratic p at
     the face). Wall faces: the nearest interior face value (``"copy"``) or its linear
-    extrapolation (``"linear"``); with a single cell across, zero.
+    extrapolation (``"linear"``); with a single cell across, zero. On a side of a periodic axis
+    (``periodic`` = (x, y)) both boundary faces take the difference of the two cells it joins.
     """
     p = np.asarray(p, float)
     if p.shape != grid.shape:
@@ -123,7 +125,10 @@ def pressure_gradient(grid: StaggeredGrid, p, boundary: str = "copy") -> tuple[n
         if n < 3:
             continue
         a = np.moveaxis(g, axis, 0)
-        if boundary == "linear" and n >= 4:
+        if periodic[axis]:
+            q = np.moveaxis(p, axis, 0)
+            a[0] = a[-1] = (q[0] - q[-1]) / (grid.dx, grid.dy)[axis]
+        elif boundary == "linear" and n >= 4:
             a[0] = 2.0 * a[1] - a[2]
             a[-1] = 2.0 * a[-2] - a[-3]
         elif boundary in ("copy", "linear"):

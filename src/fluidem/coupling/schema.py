@@ -75,7 +75,8 @@ class CouplingSection(BaseModel):
     pressure_pairing: bool = Field(
         True, description="the gas's pressure term −ε∇p takes on each face the voidage left by the particle "
                           "volume deposited there as the particles' ∇p is interpolated, so that it loses exactly "
-                          "the −V_p ∇p the particles gain (with pressure_gradient_force; particle and cell exchange)")
+                          "the −V_p ∇p the particles gain (with pressure_gradient_force; particle and cell "
+                          "exchange)")
 
     @field_validator("drag")
     @classmethod

@@ -210,8 +210,7 @@ MASS_FLOOR = 1e-4  # share of (gas mass / dt) in the reference flow of the mass 
 BLOCK_REUSE = 0.3  # band: blocks whose rows changed by less than this share of F_REUSE keep their factors
 # modes of the step inputs (begin_step's ``modes``): not given / a number (at [0, 0]) / cell centres / faces
 IN_NONE, IN_SCALAR, IN_CENTRE, IN_FACE = 0, 1, 2, 3
-IN_VOIDAGE, IN_BETA, IN_SOLIDS_U, IN_SOLIDS_V, IN_SOURCE_U, IN_SOURCE_V, IN_PRESSURE_VOIDAGE = range(7)
-N_IN = 7
+IN_VOIDAGE, IN_BETA, IN_SOLIDS_U, IN_SOLIDS_V, IN_SOURCE_U, IN_SOURCE_V = range(6)
 # begin_step status
 INPUT_OK, BAD_VOIDAGE, BAD_BETA = 0, 1, 2
 

@@ -1,8 +1,9 @@
 """Gas fields at cell centres in one HDF5 file, indexed by an XDMF file that ParaView opens.
 
 ``GasFieldWriter`` is an observer of a coupled run: each time its schedule fires it appends
-one snapshot of the gas state to ``gas.h5`` and rewrites ``gas.xdmf`` atomically, listing
-only snapshots that were written completely, so the index is always valid. A run without
+one snapshot of the gas state to ``gas.h5`` and then its grid to ``gas.xdmf`` (one write,
+``io/xdmf.py``), so the index lists only snapshots that were written completely and is valid
+between snapshots. A run without
 gas (``sim.gas is None``) writes nothing. ``read_gas_fields`` reads a run's file back as
 NumPy arrays stacked over time.
 
@@ -44,6 +45,7 @@ import numpy as np
 
 from ..schedule import EveryTime
 from .atomic import write_text_atomic
+from .xdmf import XdmfIndex, document
 
 GAS_FILE = "gas.h5"
 GAS_INDEX = "gas.xdmf"
@@ -117,6 +119,8 @@ class GasFieldWriter:
         # each time (40 ms per snapshot after 150 of them; 6 s of a 40 s hoomans-orifice run)
         self._index: list[tuple[str, float, list[str]]] | None = None
         self._next_key = 0
+        # gas.xdmf, appended to one grid a snapshot (io/xdmf.py; rewriting it whole cost O(snapshots) each time)
+        self._xdmf_index = XdmfIndex(self.xdmf, "gas")
 
     def __call__(self, sim) -> None:
         gas = getattr(sim, "gas", None)
@@ -142,8 +146,12 @@ class GasFieldWriter:
                 d.attrs["units"] = UNITS[name]
             f.flush()
             g.attrs["complete"] = True
-        self._index.append((key, float(sim.time), [n for n in FIELDS + OPTIONAL_FIELDS if n in fields]))
-        write_text_atomic(self.xdmf, xdmf_text(self.path.name, self._index, grid.nx, grid.ny))
+        names = [n for n in FIELDS + OPTIONAL_FIELDS if n in fields]
+        self._index.append((key, float(sim.time), names))
+        index = self._index
+        self._xdmf_index.append(
+            grid_text(self.path.name, key, float(sim.time), names, grid.nx, grid.ny),
+            lambda: [grid_text(self.path.name, k, t, ns, grid.nx, grid.ny) for k, t, ns in index])
 
     def _load_index(self, f: h5py.File) -> None:
         """The index of the complete snapshots in ``f`` and the key after its last group (complete or not)."""
@@ -176,6 +184,7 @@ class GasFieldWriter:
             index, nx, ny = [], 0, 0
             self._index, self._next_key = None, 0  # the new file's, on the next snapshot
         write_text_atomic(self.xdmf, xdmf_text(self.path.name, index, nx, ny))
+        self._xdmf_index.forget()
 
     def finalize(self, sim) -> None:
         """Rewrite the index from the file. It is up to date after every snapshot already, so a file
@@ -188,7 +197,8 @@ class GasFieldWriter:
                 nx, ny = int(f.attrs.get("nx", 0)), int(f.attrs.get("ny", 0))
         except (OSError, KeyError):
             return
-        write_text_atomic(self.xdmf, xdmf_text(self.path.name, index, nx, ny))
+        write_text_atomic(self.xdmf, xdmf_text(self.path.name, index, nx, ny))  # durable: the run's last
+        self._xdmf_index.forget()
 
 
 def _write_grid(f: h5py.File, grid) -> None:
@@ -218,35 +228,31 @@ def _index(f: h5py.File) -> list[tuple[str, float, list[str]]]:
     return out
 
 
+def grid_text(h5name: str, key: str, t: float, names: list[str], nx: int, ny: int) -> str:
+    """The XDMF ``<Grid>`` element of one snapshot with the fields ``names`` (``xdmf_text`` joins them)."""
+    attrs = [
+        f'      <Attribute Name="{name}" AttributeType="Scalar" Center="Cell">\n'
+        f'        <DataItem Dimensions="{ny} {nx}" NumberType="Float" Precision="8" Format="HDF">'
+        f"{h5name}:/snapshots/{key}/{name}</DataItem>\n      </Attribute>"
+        for name in names
+    ]
+    return (
+        f'    <Grid Name="gas_{key}" GridType="Uniform">\n'
+        f'      <Time Value="{t:.9g}"/>\n'
+        f'      <Topology TopologyType="2DRectMesh" Dimensions="{ny + 1} {nx + 1}"/>\n'
+        f'      <Geometry GeometryType="VXVY">\n'
+        f'        <DataItem Dimensions="{nx + 1}" NumberType="Float" Precision="8" Format="HDF">'
+        f"{h5name}:/grid/x_faces</DataItem>\n"
+        f'        <DataItem Dimensions="{ny + 1}" NumberType="Float" Precision="8" Format="HDF">'
+        f"{h5name}:/grid/y_faces</DataItem>\n      </Geometry>\n"
+        + "\n".join(attrs)
+        + "\n    </Grid>"
+    )
+
+
 def xdmf_text(h5name: str, index: list[tuple[str, float, list[str]]], nx: int, ny: int) -> str:
     """XDMF 3 temporal collection of 2DRectMesh grids, one per snapshot in ``index``."""
-    grids = []
-    for key, t, names in index:
-        attrs = [
-            f'      <Attribute Name="{name}" AttributeType="Scalar" Center="Cell">\n'
-            f'        <DataItem Dimensions="{ny} {nx}" NumberType="Float" Precision="8" Format="HDF">'
-            f"{h5name}:/snapshots/{key}/{name}</DataItem>\n      </Attribute>"
-            for name in names
-        ]
-        grids.append(
-            f'    <Grid Name="gas_{key}" GridType="Uniform">\n'
-            f'      <Time Value="{t:.9g}"/>\n'
-            f'      <Topology TopologyType="2DRectMesh" Dimensions="{ny + 1} {nx + 1}"/>\n'
-            f'      <Geometry GeometryType="VXVY">\n'
-            f'        <DataItem Dimensions="{nx + 1}" NumberType="Float" Precision="8" Format="HDF">'
-            f"{h5name}:/grid/x_faces</DataItem>\n"
-            f'        <DataItem Dimensions="{ny + 1}" NumberType="Float" Precision="8" Format="HDF">'
-            f"{h5name}:/grid/y_faces</DataItem>\n      </Geometry>\n"
-            + "\n".join(attrs)
-            + "\n    </Grid>"
-        )
-    return (
-        '<?xml version="1.0" ?>\n<!DOCTYPE Xdmf SYSTEM "Xdmf.dtd" []>\n<Xdmf Version="3.0">\n  <Domain>\n'
-        '   <Grid Name="gas" GridType="Collection" CollectionType="Temporal">\n'
-        + "\n".join(grids)
-        + ("\n" if grids else "")
-        + "   </Grid>\n  </Domain>\n</Xdmf>\n"
-    )
+    return document("gas", [grid_text(h5name, key, t, names, nx, ny) for key, t, names in index])
 
 
 def read_gas_fields(run_dir: str | Path, fields=None) -> dict[str, np.ndarray]:

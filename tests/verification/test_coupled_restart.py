@@ -1,7 +1,8 @@
-"""A coupled run stopped at a checkpoint and resumed equals the run made in one go (the gas state
-and the phase within the gas step are in the restart file). Not bit for bit: the resumed gas
-solver starts with a fresh pressure-matrix factorisation where the uninterrupted one reuses an
-older one (``jacobian_reuse``), so the two agree to the gas tolerance, not to the last bit."""
+"""A coupled run stopped at a checkpoint and resumed equals the run made in one go, bit for bit: the
+gas state, the phase within the gas step and the pressure-matrix factors the next gas step reuses
+(``jacobian_reuse``) are in the restart file. Before the factors were (fifteenth session), the resumed
+solver factorised afresh and the two runs agreed only to the gas tolerance, which a bubbling bed
+amplifies into another flow within a fraction of a second."""
 import numpy as np
 import pytest
 
@@ -14,11 +15,10 @@ def test_resumed_coupled_run_matches_the_uninterrupted_one(stopped_and_resumed):
     whole, first, again = stopped_and_resumed(case, 0.0105)  # stops inside a gas step (DT = 1 ms)
     assert first.step % first.gas.substeps != 0
     assert again.step == whole.step
-    np.testing.assert_allclose(again.state.position, whole.state.position, rtol=1e-9, atol=1e-12)
-    np.testing.assert_allclose(again.state.velocity, whole.state.velocity, rtol=1e-6, atol=1e-12)
-    np.testing.assert_allclose(again.gas.state.p, whole.gas.state.p, rtol=1e-12)
-    for k in ("u", "v"):
-        np.testing.assert_allclose(getattr(again.gas.state, k), getattr(whole.gas.state, k), rtol=0, atol=1e-9)
+    for k in ("position", "velocity", "omega"):
+        assert np.array_equal(getattr(again.state, k), getattr(whole.state, k)), k
+    for k in ("p", "rho", "u", "v", "voidage"):
+        assert np.array_equal(getattr(again.gas.state, k), getattr(whole.gas.state, k)), k
 
 
 def test_largest_gas_courant_number_is_kept_across_a_resume(stopped_and_resumed):

@@ -386,6 +386,8 @@ class GasCoupling:
     # ------------------------------------------------------------ checkpoint
     def checkpoint_arrays(self) -> dict[str, np.ndarray]:
         out = {f"gas/{k}": v for k, v in self.state.arrays().items()}
+        # the pressure-matrix factors the next step reuses: a resumed run goes on bit for bit (GasSolver)
+        out.update({f"gas_solver/{k}": v for k, v in self.solver.checkpoint_arrays().items()})
         if self._paired_ready and self.exchange == "particle":
             out["coupling/kp"] = self._kp
         if self._paired_ready and self.exchange == "cell":
@@ -397,6 +399,9 @@ class GasCoupling:
 
     def restore(self, arrays: dict[str, np.ndarray], scalars: dict) -> None:
         self.state = GasState(**{k: np.ascontiguousarray(arrays[f"gas/{k}"], dtype=float) for k in GAS_KEYS})
+        solver = {k.split("/", 1)[1]: v for k, v in arrays.items() if k.startswith("gas_solver/")}
+        if solver:  # absent from checkpoints before 2026-11-26 (fifteenth session): fresh factors
+            self.solver.restore_factors(solver)
         self.gas_steps = int(scalars["gas_steps"])
         self.courant_max = float(scalars.get("gas_courant_max", 0.0))  # absent from checkpoints before 2026-11-26
         self._set_volumes()  # the restored particles may be numbered otherwise than at construction

@@ -1019,6 +1019,44 @@ class GasSolver:
         self._ipar[K.I_NFACT] += 1
         self._set_iterate_args()
 
+    # ------------------------------------------------------------ checkpoint
+    FACTOR_NAMES = ("lu_index", "l_indices", "l_data", "u_indices", "u_data", "u_diagonal")
+
+    def checkpoint_arrays(self) -> dict[str, np.ndarray]:
+        """The pressure-matrix factors a step starts from, for checkpoints.
+
+        A step's Newton corrections use factors of an earlier matrix while the new one differs from it by
+        less than ``jacobian_reuse``, so the converged state depends, within the tolerance, on which
+        matrix was factorised when. A run resumed with fresh factors then drifts from the uninterrupted run
+        at the tolerance's level, and a bubbling bed, being chaotic, makes that a different flow within a
+        second (tsuji-jet: particles 0.14 m apart 0.1 s after a resume). With these arrays restored
+        (``restore_factors``) the resumed run goes on bit for bit. The band and SuperLU paths; the pyamg
+        path keeps a Python hierarchy and starts afresh (a tolerance-level difference, as before)."""
+        ipar = self._ipar
+        out = {"matrix": self.MAT, "band": self._band, "band_lu": self._band_lu,
+               "flags": np.array([ipar[K.I_HAVE_LU], ipar[K.I_SOLVER]], np.int64)}
+        out.update(zip(self.FACTOR_NAMES, self._factors))
+        return out
+
+    def restore_factors(self, arrays: dict[str, np.ndarray]) -> None:
+        """Take back ``checkpoint_arrays`` (a CaseError when they are not this solver's: another grid or
+        boundaries, whose matrix has other entries)."""
+        for name, mine in (("matrix", self.MAT), ("band", self._band), ("band_lu", self._band_lu)):
+            if arrays[name].shape != mine.shape:
+                raise CaseError(f"checkpoint gas solver {name}: shape {arrays[name].shape}, this case's is "
+                                f"{mine.shape} (a checkpoint of another grid or boundaries)")
+        self.MAT[...] = arrays["matrix"]
+        self._band[...] = arrays["band"]
+        self._band_lu[...] = arrays["band_lu"]
+        have_lu, solver = (int(x) for x in arrays["flags"])
+        if solver == SOLVER_PYAMG or self._ipar[K.I_SOLVER] == SOLVER_PYAMG:
+            have_lu = 0  # the pyamg hierarchy is not in the checkpoint: made anew
+        else:
+            self._ipar[K.I_SOLVER] = solver
+        self._ipar[K.I_HAVE_LU] = have_lu
+        self._factors = tuple(np.ascontiguousarray(arrays[k]) for k in self.FACTOR_NAMES)
+        self._set_iterate_args()
+
     @property
     def factorisations(self) -> int:
         """Pressure-matrix factorisations so far (band or SuperLU; multigrid and pyamg: hierarchies made)."""

@@ -19,24 +19,17 @@ stays (its probes, fields and summary are those of a plain ``fluidem run tsuji-j
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import json
 import os
 import subprocess
 import sys
 from pathlib import Path
 
+from compare_peers import _peers_module  # benchmarks/ is this script's folder, first on sys.path
+
 from fluidem.bench import settled_bed
 
 LAMMPS_ANCHOR_1CORE = 6.07e6  # shared/PEERS.md: LAMMPS 29 Sep 2021 GRANULAR, 10k bed, one core
-
-
-def _peers():
-    path = Path(__file__).parent / "peers" / "run_peers.py"
-    spec = importlib.util.spec_from_file_location("run_peers", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
 
 
 def lammps_rate(peers, bed, steps: int) -> float:
@@ -59,7 +52,7 @@ def main() -> None:
     ap.add_argument("--lammps-steps", type=int, default=1000)
     ap.add_argument("--json", help="write the figures as JSON")
     a = ap.parse_args()
-    peers = _peers()
+    peers = _peers_module()
     bed = peers.load_bed(settled_bed(10000))
     out = Path(a.out)
     env = dict(os.environ, NUMBA_NUM_THREADS=str(a.threads))

@@ -4,7 +4,7 @@ The particle and gas writers each keep an index file (``particles.xdmf``, ``gas.
 every snapshot written so far, so ParaView can open a run while it goes on or after it stopped.
 Rewriting the whole file at every snapshot costs O(snapshots) each time (at 400 snapshots of the
 tsuji-jet case: 1 MB, 10–20 ms a snapshot, a few per cent of the run), so ``XdmfIndex`` writes the
-file once and then appends: the new grid and the closing tags go in one ``os.pwrite`` over the old
+file once and then appends: the new grid and the closing tags go in one write over the old
 closing tags. A process killed between two snapshots leaves a complete, valid file; one write of a
 few kilobytes to a regular file is not interrupted half-way by a signal. Whenever the file is not
 as this object left it (missing, another size: a run resumed, another process), ``append`` writes
@@ -67,11 +67,9 @@ class XdmfIndex:
             self.rewrite(all_grids())
             return
         data = (grid + "\n").encode() + footer
-        fd = os.open(self.path, os.O_WRONLY)
-        try:
-            written = os.pwrite(fd, data, self._size - len(footer))
-        finally:
-            os.close(fd)
+        with open(self.path, "r+b", buffering=0) as f:  # unbuffered: one write call (os.pwrite is POSIX only)
+            f.seek(self._size - len(footer))
+            written = f.write(data)
         if written != len(data):  # not seen on a regular file; the whole file then, to be sure
             self.rewrite(all_grids())
             return

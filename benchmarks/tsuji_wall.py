@@ -25,7 +25,9 @@ import subprocess
 import sys
 from pathlib import Path
 
-from compare_peers import _peers_module  # benchmarks/ is this script's folder, first on sys.path
+from compare_peers import (
+    _peers_module,  # benchmarks/ is this script's folder, first on sys.path
+)
 
 from fluidem.bench import settled_bed
 

@@ -2,7 +2,7 @@
 
     python benchmarks/coupled_profile.py [--case tsuji-jet] [--until 0.2] [--repeat 3]
                                          [--set coupling.drag_update=frozen ...]
-                                         [--from runs/tsuji/restart.h5]
+                                         [--from runs/tsuji/restart.h5] [--jacobian-reuse 0.03]
 
 ``--from`` starts each timed run from a checkpoint of the same case (a developed, bubbling
 bed instead of the settling start); ``--until`` then counts from the checkpoint's time.
@@ -31,6 +31,7 @@ import json
 from pathlib import Path
 
 import fluidem as fd
+from fluidem.gas import _solver_kernels as K
 
 from fluidem.bench import COUPLED_COMPONENTS as COMPONENTS
 from fluidem.bench import profile_coupled
@@ -47,12 +48,30 @@ def _parse_sets(items):
     return out
 
 
-def profile(case, until: float, start=None) -> dict:
+def profile(case, until: float, start=None, jacobian_reuse=None) -> dict:
     sim = fd.Simulation(case)
     if start is not None:
         sim.load_checkpoint(start)
         until = sim.time + until
-    return profile_coupled(sim, until)
+    solver = sim.gas.solver
+    if jacobian_reuse is not None:  # GasSolver's argument; not a case key
+        solver.jacobian_reuse = jacobian_reuse
+        solver._fpar[K.F_REUSE] = jacobian_reuse
+    f0, steps0 = solver.factorisations, sim.gas.gas_steps
+    corrections = []
+    advance = solver.advance
+
+    def counted(*args, **kw):
+        info = advance(*args, **kw)
+        corrections.append(info.iterations)
+        return info
+
+    solver.advance = counted
+    row = profile_coupled(sim, until)
+    steps = max(sim.gas.gas_steps - steps0, 1)
+    row["factorisations_per_step"] = (solver.factorisations - f0) / steps
+    row["corrections_per_step"] = sum(corrections) / steps
+    return row
 
 
 def main() -> None:
@@ -63,13 +82,16 @@ def main() -> None:
     ap.add_argument("--set", action="append", help="case override key=value (as `fluidem run --set`)")
     ap.add_argument("--json", help="write the rows as JSON")
     ap.add_argument("--from", dest="start", type=Path, help="checkpoint (restart.h5) of the same case to start from")
+    ap.add_argument("--jacobian-reuse", type=float, default=None,
+                    help="the gas solver's jacobian_reuse (default its own, 0.01): factors kept while the matrix "
+                         "changes less than this")
     a = ap.parse_args()
     case = fd.load_case(a.case)
     sets = _parse_sets(a.set)
     if sets:
         case = case.with_overrides(sets)
     fd.Simulation(case).run(until=min(a.until, 20 * case.gas.dt))  # compile / load the caches
-    rows = [profile(case, a.until, a.start) for _ in range(a.repeat)]
+    rows = [profile(case, a.until, a.start, a.jacobian_reuse) for _ in range(a.repeat)]
     keys = [k for k, _, _ in COMPONENTS] + ["other", "total"]
     n = rows[0]["gas_steps"]
     print(f"case {a.case}, {a.until} s from {a.start or 'the start'}, {n} gas steps, overrides {sets or 'none'}; fluidem {fd.__file__}")
@@ -79,6 +101,8 @@ def main() -> None:
         vals = [r[k] for r in rows]
         print(f"{k:12s} " + " ".join(f"{v:9.3f}" for v in vals) + f" {min(vals):9.3f} {1e3 * min(vals) / n:12.4f}")
     print("calls: " + ", ".join(f"{k} {v}" for k, v in rows[0]["calls"].items()))
+    print(f"gas solver: {rows[0]['factorisations_per_step']:.3f} factorisations and "
+          f"{rows[0]['corrections_per_step']:.2f} Newton corrections per gas step")
     if a.json:
         with open(a.json, "w") as f:
             json.dump({"case": a.case, "until": a.until, "overrides": sets, "rows": rows}, f, indent=2)

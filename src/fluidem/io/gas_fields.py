@@ -3,9 +3,8 @@
 ``GasFieldWriter`` is an observer of a coupled run: each time its schedule fires it appends
 one snapshot of the gas state to ``gas.h5`` and then its grid to ``gas.xdmf`` (one write,
 ``io/xdmf.py``), so the index lists only snapshots that were written completely and is valid
-between snapshots. A run without
-gas (``sim.gas is None``) writes nothing. ``read_gas_fields`` reads a run's file back as
-NumPy arrays stacked over time.
+between snapshots. A run without gas (``sim.gas is None``) writes nothing. ``read_gas_fields``
+reads a run's file back as NumPy arrays stacked over time.
 
 Layout of ``gas.h5`` (all float64, SI units)::
 

@@ -5,6 +5,7 @@ Every choice is a named key; unknown keys are errors that list the allowed ones.
 """
 from __future__ import annotations
 
+import difflib
 import math
 import tomllib
 from importlib import resources
@@ -17,7 +18,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 from .coupling.schema import CouplingSection
 from .errors import CaseError
 from .gas.schema import GasSection
-from .particles.contact import HardSphere, HertzMindlin, LinearSpringDashpot
+from .particles.contact import contact_models
 
 Vec3 = tuple[float, float, float]
 
@@ -26,7 +27,9 @@ class Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", validate_assignment=True)
 
 
-ContactLaw = Annotated[Union[LinearSpringDashpot, HertzMindlin, HardSphere], Field(discriminator="model")]
+# every registered contact law, chosen by its ``model`` key (the registry is the only list of models)
+ContactLaw = Annotated[Union[tuple(contact_models.get(n) for n in contact_models.names())],
+                       Field(discriminator="model")]
 
 
 class SizeDistribution(Strict):
@@ -307,62 +310,89 @@ def apply_overrides(data: dict, overrides: dict[str, Any]) -> None:
                 raise CaseError(f"--set {key}: {where!r} is a value, not a section (it is {node!r})")
 
 
-def _allowed_keys(loc: tuple) -> list[str] | None:
-    """Field names allowed at the section ``loc`` names (best effort, for error messages)."""
-    model: Any = Case
-    for part in loc:
-        if isinstance(part, int):
-            continue
-        fields = getattr(model, "model_fields", None)
-        if fields is None:
-            return None
-        if part in fields:
-            ann = fields[part].annotation
-            model = _model_of(ann)
-        else:
-            from .particles.contact import contact_models
-
-            if part in contact_models:
-                model = contact_models.get(part)
-            else:
-                return None
-        if model is None:
-            return None
-    fields = getattr(model, "model_fields", None)
-    return sorted(fields) if fields else None
-
-
-def _model_of(ann):
+def _models_of(ann) -> list[type[BaseModel]]:
+    """The pydantic models an annotation admits (a model, a union of models, a list or dict of them, …)."""
     import typing
 
     if isinstance(ann, type) and issubclass(ann, BaseModel):
-        return ann
+        return [ann]
+    out = []
     for arg in typing.get_args(ann):
-        m = _model_of(arg)
-        if m is not None:
-            return m
+        out += [m for m in _models_of(arg) if m not in out]
+    return out
+
+
+def _tag_field(models) -> str | None:
+    """The discriminator key (``model``, ``kind``) of a union of several models: the Literal field they share."""
+    import typing
+
+    if len(models) < 2:
+        return None
+    for name in models[0].model_fields:
+        if all(name in m.model_fields and typing.get_origin(m.model_fields[name].annotation) is Literal
+               for m in models):
+            return name
     return None
+
+
+def _resolve(loc: tuple) -> tuple[list[str], type[BaseModel] | None]:
+    """The printable path of an error location (without pydantic's union tags) and the model of the section it
+    ends in (None where it cannot tell)."""
+    import typing
+
+    shown: list[str] = []
+    models: list = [Case]
+    keyed = False  # the next part is a key of a dict of models (a gas side)
+    for part in loc:
+        if isinstance(part, int) or keyed:
+            shown.append(str(part))
+            keyed = False
+            continue
+        if len(models) > 1:  # a discriminated union: pydantic puts the chosen tag here
+            tag = _tag_field(models)
+            chosen = [m for m in models if tag and m.model_fields[tag].default == part]
+            if chosen:
+                models = chosen
+                continue
+        fields = models[0].model_fields if len(models) == 1 else {}
+        shown.append(part)
+        ann = fields[part].annotation if part in fields else None
+        models = _models_of(ann) if ann is not None else []
+        keyed = any(typing.get_origin(a) is dict for a in (ann, *typing.get_args(ann)))
+    return shown, (models[0] if len(models) == 1 else None)
 
 
 def format_validation_error(err: ValidationError) -> str:
     lines = []
     for e in err.errors():
         loc = tuple(x for x in e["loc"] if not (isinstance(x, str) and x.startswith("function-")))
-        # drop discriminator tags from the printed path
-        from .particles.contact import contact_models
-
-        shown = ".".join(str(x) for x in loc if not (isinstance(x, str) and x in contact_models))
+        parts, _ = _resolve(loc)
+        shown = ".".join(parts)
+        ctx = e.get("ctx") or {}
+        inner = ctx.get("error")
+        if isinstance(inner, CaseError) and inner.problems:  # a building block that checks itself (gas sides)
+            for sub, value, msg in inner.problems:
+                key = ".".join([*parts, *map(str, sub)])
+                lines.append(f"{key} = {value!r}: {msg}" if sub else f"{key}: {msg}")
+            continue
         if e["type"] == "extra_forbidden":
-            allowed = _allowed_keys(loc[:-1])
+            _, model = _resolve(loc[:-1])
+            allowed = sorted(model.model_fields) if model is not None else None
             extra = f"; allowed keys: {', '.join(allowed)}" if allowed else ""
             lines.append(f"unknown key {shown!r} (value {e['input']!r}){extra}")
         elif e["type"] == "missing":
             lines.append(f"missing key {shown!r}")
         elif e["type"] == "union_tag_invalid":
-            lines.append(f"{shown}: model = {e['input'].get('model') if isinstance(e['input'], dict) else e['input']!r}"
-                         f" is not a known model; allowed: {', '.join(contact_models.names())}")
+            key = str(ctx.get("discriminator", "model")).strip("'")
+            value = e["input"].get(key) if isinstance(e["input"], dict) else e["input"]
+            allowed = [t.strip() for t in str(ctx.get("expected_tags", "")).replace("'", "").split(",")]
+            hint = difflib.get_close_matches(str(value), allowed, n=1)
+            lines.append(f"{shown}: {key} = {value!r} is not a known model; allowed: {', '.join(allowed)}"
+                         + (f"; did you mean {hint[0]!r}?" if hint else ""))
         elif e["type"] == "union_tag_not_found":
-            lines.append(f"{shown}: needs a 'model' key; allowed: {', '.join(contact_models.names())}")
+            key = str(ctx.get("discriminator", "model")).strip("'")
+            _, model = _resolve(loc)
+            lines.append(f"{shown}: needs a {key!r} key" + _choices(loc, key))
         else:
             msg = e["msg"].removeprefix("Value error, ")
             value = e.get("input")
@@ -371,6 +401,18 @@ def format_validation_error(err: ValidationError) -> str:
             else:
                 lines.append(f"{shown} = {value!r}: {msg}")
     return "invalid case:\n  " + "\n  ".join(lines)
+
+
+def _choices(loc: tuple, key: str) -> str:
+    """'; allowed: a, b' — the tags of the union at ``loc`` (or nothing)."""
+    models: list = [Case]
+    for part in loc:
+        if isinstance(part, int):
+            continue
+        fields = models[0].model_fields if len(models) == 1 else {}
+        models = _models_of(fields[part].annotation) if part in fields else []
+    tags = sorted(str(m.model_fields[key].default) for m in models if key in m.model_fields)
+    return f"; allowed: {', '.join(tags)}" if tags else ""
 
 
 def validate_case(data: dict) -> Case:

@@ -45,3 +45,43 @@ class Registry(Generic[T]):
 
     def __contains__(self, name: str) -> bool:
         return name in self._items
+
+
+def import_submodules(package_name: str, package_path, skip=("base",)) -> None:
+    """Import every module of a package whose name does not start with ``_`` (and is not in ``skip``), so that
+    each model file registers itself: adding a model is adding its file."""
+    import importlib
+    import pkgutil
+
+    for info in sorted(pkgutil.iter_modules(package_path), key=lambda m: m.name):
+        if not info.name.startswith("_") and info.name not in skip:
+            importlib.import_module(f"{package_name}.{info.name}")
+
+
+def compiled_switch(name: str, cases: dict[int, Callable], args: tuple[str, ...], code: str, default: str,
+                    module: str, source_file: str, **njit_options):
+    """A compiled function ``name(*args)`` that calls ``cases[c](*args)`` for the integer ``c`` the expression
+    ``code`` gives (``"int(p[0])"``), and returns ``default`` for any other code.
+
+    This is the ``switch (model)`` of LAMMPS written from a registry: the same ``if c == 1: return …`` chain a
+    hand-written dispatch module holds, so that the callees inline and the callers vectorise as before, while
+    the list of models is the registry's alone. Numba has no dispatch over a table of functions that keeps
+    them inlined (first-class function objects are called through pointers), hence the source text. The
+    function is compiled with ``njit(cache=True, **njit_options)`` and cached as if defined in
+    ``source_file``; fluidem's cache stamp (``_numba_cache``) covers every model file, so a new model
+    recompiles it.
+    """
+    from numba import njit
+
+    arglist = ", ".join(args)
+    lines = [f"def {name}({arglist}):", f"    c = {code}"]
+    glob = {"__name__": module}
+    for c in sorted(cases):
+        callee = f"_case_{c}"
+        glob[callee] = cases[c]
+        lines += [f"    if c == {c}:", f"        return {callee}({arglist})"]
+    lines.append(f"    return {default}")
+    exec(compile("\n".join(lines) + "\n", source_file, "exec"), glob)  # noqa: S102 - source built above
+    func = glob[name]
+    func.__qualname__ = name
+    return njit(cache=True, **njit_options)(func)

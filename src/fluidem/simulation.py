@@ -7,8 +7,8 @@ say *what to keep*. Observers are objects with ``schedule`` (``Every``/``EveryTi
 from __future__ import annotations
 
 import json
+import logging
 import math
-import sys
 import time as _time
 from pathlib import Path
 
@@ -58,11 +58,12 @@ class Checkpointer:
 
 
 class Progress:
-    """Prints simulated time, wall time, ETA and particle-steps/s every ``interval`` wall seconds."""
+    """Reports simulated time, wall time, ETA and particle-steps/s every ``interval`` wall seconds, at INFO on
+    the logger ``fluidem.progress`` (the command line shows it on stderr; ``--quiet`` hides it)."""
 
-    def __init__(self, interval: float = 2.0, stream=None):
+    def __init__(self, interval: float = 2.0, logger: logging.Logger | None = None):
         self.interval = interval
-        self.stream = stream or sys.stderr
+        self.logger = logger or logging.getLogger("fluidem.progress")
         self._last = None
 
     def maybe(self, sim, until: float, force: bool = False) -> None:
@@ -77,8 +78,8 @@ class Progress:
         left = until - sim.time
         eta = wall / done * left if done > 0 else math.nan
         rate = sim._run_particle_steps / wall if wall > 0 else 0.0
-        print(f"t = {sim.time:.4f} / {until:.4f} s   wall {wall:7.1f} s   ETA {eta:7.1f} s   "
-              f"{rate:.3g} particle-steps/s", file=self.stream, flush=True)
+        self.logger.info(f"t = {sim.time:.4f} / {until:.4f} s   wall {wall:7.1f} s   ETA {eta:7.1f} s   "
+                         f"{rate:.3g} particle-steps/s")
 
 
 class Simulation:
@@ -101,8 +102,8 @@ class Simulation:
         else:
             self.engine = engine_for(case)
             self.engine.check_initial_overlaps()
-        # hard spheres: total energy at t = 0 for the energy balance of Hoomans 1996 eq. 51
-        self.energy0 = P.collisions(self.engine)["total_energy_J"] if P.is_hard_sphere(self.engine) else None
+        # the engine's total energy at t = 0 where it books it (hard spheres: Hoomans 1996 eq. 51's balance)
+        self.energy0 = self.engine.bookkeeping().get("total_energy_J")
         self.gas = None
         if case.gas is not None:  # two-way coupled run: gas steps of DT, DEM sub-steps within
             from .coupling.exchange import GasCoupling
@@ -127,7 +128,7 @@ class Simulation:
                 self._restore(*restart[:2])
                 for obs in self.observers.values():
                     if hasattr(obs, "truncate_after"):
-                        obs.truncate_after(self.step)
+                        obs.truncate_after(self.steps)
 
     # ------------------------------------------------------------ clock
     @property
@@ -135,7 +136,8 @@ class Simulation:
         return self.engine.dt
 
     @property
-    def step(self) -> int:
+    def steps(self) -> int:
+        """DEM steps taken since t = 0."""
         return self.engine.steps
 
     @property
@@ -171,27 +173,59 @@ class Simulation:
         end = self.case.time.end
         extra = {"contacts": lambda s: F.contact_numbers(s.engine).astype(np.int32)}
         if self.gas is not None:
-            if not P.is_hard_sphere(self.engine):  # collisions are impulses: no contact force to show
+            if self.engine.contact_forces:  # hard spheres: collisions are impulses, no contact force to show
                 extra["contact_force"] = lambda s: F.contact_force(s.engine)
             extra["gas_force"] = lambda s: F.gas_force(s.engine)
         self.observers["snapshots"] = ParticleWriter(self.out_dir, EveryTime(o.snapshot_interval or end / 100),
                                                      extra_fields=extra)
         if self.gas is not None:  # gas fields at the particle snapshot times, written before the checkpoint
             self.observers["gas_fields"] = GasFieldWriter(self.out_dir, EveryTime(o.snapshot_interval or end / 100))
-        probes = [lambda s: P.energies(s.engine), lambda s: P.contacts(s.engine), F.bed_probes]
-        if P.is_hard_sphere(self.engine):
-            probes.insert(1, lambda s: P.collisions(s.engine))
+        probes = [lambda s: P.energies(s.engine), lambda s: s.engine.bookkeeping(), lambda s: P.contacts(s.engine),
+                  F.bed_probes]
         self.observers["probes"] = ProbeWriter(self.out_dir, probes, EveryTime(o.probe_interval or end / 1000))
         self.observers["checkpoint"] = Checkpointer(self.out_dir, EveryTime(o.checkpoint_interval or end / 10))
 
     # ------------------------------------------------------------ stepping
-    def step_once(self, nsteps: int = 1) -> None:
-        """Advance ``nsteps`` DEM steps (no observers)."""
-        if self.gas is not None:
-            self.gas.advance(nsteps)
+    def step(self) -> None:
+        """Advance by one gas step DT (without gas: by one DEM step dt); no observers.
+
+        Order of one gas step (``coupling.exchange.GasCoupling`` holds each stage)::
+
+            map_to_grid            particles → voidage ε and solids velocity per cell    Sun 2007 eqs 34-35;
+                                                                                         Hoomans 1996 eqs 49-50
+            exchange_coefficients  the gas's interphase β from each particle's drag      Sun 2007 eqs 29, 33
+                                   (or per cell), pressure voidage of each face
+            advance_gas            pressure correction, gas t → t + DT                   Hoomans 1996 eqs 42-48
+            to_particles           drag and −V_p ∇p on each particle                     Sun 2007 eqs 28-29;
+                                                                                         Hoomans 1996 eqs 40-41
+            particle_substeps      the DEM sub-steps dt = DT / substeps, one compiled    Sun 2007 eqs 15-26;
+                                   call (hard spheres: force steps with collisions)      Hoomans 1996 §2.4
+
+        ``run`` then calls each observer whose schedule fires; observers read the state, never write it.
+        A run stopped within a gas step (``steps % substeps > 0``) finishes that gas step's sub-steps only.
+        """
+        n = 1 if self.gas is None else self.gas.substeps - self.engine.steps % self.gas.substeps
+        self.advance(n)
+
+    def advance(self, nsteps: int = 1) -> None:
+        """Advance ``nsteps`` DEM steps (any number: gas steps at multiples of ``substeps``, in the order of
+        ``step``); no observers."""
+        eng, cpl = self.engine, self.gas
+        if cpl is None:
+            eng.advance(nsteps)
         else:
-            self.engine.advance(nsteps)
-        self.particle_steps += nsteps * self.engine.state.n
+            left = nsteps
+            while left > 0:
+                phase = eng.steps % cpl.substeps
+                if phase == 0:  # a gas step begins: stages 1-4 of ``step``
+                    smap = cpl.map_to_grid()
+                    coefficients = cpl.exchange_coefficients(smap)
+                    cpl.advance_gas(smap, coefficients)
+                    cpl.to_particles()
+                left -= cpl.particle_substeps(min(left, cpl.substeps - phase))
+        self.particle_steps += nsteps * eng.state.n
+
+    step_once = advance  # the former name of ``advance``
 
     def run(self, until: float | None = None) -> dict:
         """Advance to simulated time ``until`` (default the case's end), firing observers; returns the summary."""
@@ -201,8 +235,8 @@ class Simulation:
         self._run_time_start = self.time
         self._run_particle_steps = 0
         wall0 = self.wall_time
-        nxt = {k: o.schedule.next_step(self.step, self.dt) for k, o in self.observers.items()}
-        if self.step == 0:
+        nxt = {k: o.schedule.next_step(self.steps, self.dt) for k, o in self.observers.items()}
+        if self.steps == 0:
             t0 = _time.perf_counter()
             for obs in self.observers.values():
                 obs(self)
@@ -212,14 +246,14 @@ class Simulation:
         self._stop_requested = False
         handlers = self._install_signal_handlers()
         try:
-            while self.step < target:
+            while self.steps < target:
                 if self._stop_requested:
                     raise KeyboardInterrupt
-                stop = min([target, self.step + chunk] + list(nxt.values()))
+                stop = min([target, self.steps + chunk] + list(nxt.values()))
                 t0 = _time.perf_counter()
                 engine0 = self.gas.engine_seconds if self.gas is not None else 0.0
-                n = stop - self.step
-                self.step_once(n)
+                n = stop - self.steps
+                self.advance(n)
                 if self.startup_s is None:
                     self.startup_s = seconds_since_process_start()
                 self._run_particle_steps += n * self.engine.state.n
@@ -236,9 +270,9 @@ class Simulation:
                 self.wall_time = wall0 + _time.perf_counter() - self._run_wall_start
                 t0 = _time.perf_counter()
                 for k, obs in self.observers.items():
-                    if self.step >= nxt[k]:
+                    if self.steps >= nxt[k]:
                         obs(self)
-                        nxt[k] = obs.schedule.next_step(self.step, self.dt)
+                        nxt[k] = obs.schedule.next_step(self.steps, self.dt)
                 self.output_seconds += _time.perf_counter() - t0
                 if self.progress is not None:
                     self.progress.maybe(self, until)
@@ -326,7 +360,7 @@ class Simulation:
             "wall_time_s": self.wall_time,
             "n_particles": eng.state.n,
             "particle_steps_per_s": self.particle_steps / self.wall_time if self.wall_time > 0 else None,
-            "steps": self.step,
+            "steps": self.steps,
             "dt_s": self.dt,
             "contact_time_s": getattr(eng, "contact_time", None),
             "neighbour_rebuilds": eng.rebuilds,
@@ -340,24 +374,14 @@ class Simulation:
         }
         if self.case.particles.dimensions == 2:
             out["packing_fraction"] = P.surface_packing_fraction(eng)
-        if P.is_hard_sphere(eng):
-            h = P.collisions(eng)
-            out.update(collisions=h["collisions"], wall_collisions=h["wall_collisions"],
-                       collisions_per_s=h["collisions"] / self.wall_time if self.wall_time > 0 else None,
-                       collisions_per_particle_s=(h["collisions"] / out["particle_time_s"]
-                                                  if out["particle_time_s"] > 0 else None),
-                       collapse_remedy_count=h["remedy_count"],
-                       dissipated_energy_J=h["dissipated_normal_J"] + h["dissipated_tangential_J"])
-            if self.energy0 and self.gas is None:  # with gas, the gas does work on the particles
-                # Hoomans 1996 eq. 51: relative error of E_kin + E_pot + E_rot + E_dsp
-                out["energy_error_rel"] = abs(h["total_energy_J"] - self.energy0) / abs(self.energy0)
+        out.update(eng.summary_entries(self.wall_time, out["particle_time_s"], self.energy0, self.gas is not None))
         if self.gas is not None:
             out.update(gas_dt_s=self.gas.gas_dt, gas_steps=self.gas.gas_steps, dem_substeps=self.gas.substeps,
                        gas_courant_max=self.gas.courant_max)
             out["multicontact_ratio"] = F.multicontact_ratio(F.contact_numbers(eng))
             out["pressure_drop_bed_Pa"] = F.pressure_drop(self.gas.grid, self.gas.state.p,
                                                           self.gas.grid.y_centres[-1] + 0.5 * self.gas.grid.dy)
-            if not P.is_hard_sphere(eng):  # Sun 2007 Figs 7/12: cell contact force over gas force, end state
+            if eng.contact_forces:  # Sun 2007 Figs 7/12: cell contact force over gas force, end state
                 out["contact_drag_ratio_max"] = F.largest_force_ratio(self.gas.grid, eng)  # NaN → null below
             if self.out_dir is not None:
                 out.update(F.time_averages(self.out_dir / "probes.csv", self.time))

@@ -6,7 +6,7 @@
                  (Sun 2007 eq. 29) and −V_p ∇p (eq. 28), optionally swapped straight into the
                  engine's external and total forces
 
-Drag laws are chosen by integer code (``drag/_dispatch.py``). Both force kernels check the
+The drag law is its packed row ``law`` (``DragLaw.pack``; ``drag/_dispatch.py``). Both force kernels check the
 drag arguments as ``DragLaw.beta_per_solids`` does and return the number of particles whose
 arguments are out of range (``cell_beta`` leaves them out, ``gas_forces`` gives them NaN; the
 caller raises).
@@ -55,11 +55,11 @@ def store_force(out, total, q, fx, fy, fz, follow):
 
 
 @njit(cache=True, error_model="numpy")
-def cell_beta(code, position, radius, volume, u, v, rho, voidage, solids_u, solids_v, mu, dx, dy, cell_volume,
+def cell_beta(law, position, radius, volume, u, v, rho, voidage, solids_u, solids_v, mu, dx, dy, cell_volume,
               out):
     """out[i, j] = Σ_{p in (i, j)} β/(1 − ε) V_p / V_cell [kg m^-3 s^-1] (Sun 2007 eq. 33).
 
-    Each particle counts in the cell of its centre; β/(1 − ε) of drag ``code`` is taken with the
+    Each particle counts in the cell of its centre; β/(1 − ε) of the drag law packed in ``law`` is taken with the
     cell's voidage ε and gas density, the particle's diameter and the cell's slip
     |(u_cell, v_cell) − (v_s,x, v_s,y)|, u_cell and v_cell the means of the two faces.
     position : (N, ≥2) [m]; radius, volume : (N,); u : (nx + 1, ny); v : (nx, ny + 1);
@@ -87,7 +87,7 @@ def cell_beta(code, position, radius, volume, u, v, rho, voidage, solids_u, soli
             if not _drag_arguments_valid(eps, slip, d, rg, mu):
                 bad += 1
                 continue
-            b = beta_per_solids(code, eps, slip, d, rg, mu, 1.0)
+            b = beta_per_solids(law, eps, slip, d, rg, mu, 1.0)
             done_d[i, j] = d
             done_b[i, j] = b
         out[i, j] += b * volume[p]  # eq. 33
@@ -112,7 +112,7 @@ def _mean2(f, i, j, w):
 
 
 @njit(cache=True, error_model="numpy")
-def gas_forces(code, position, velocity, radius, volume, u, v, voidage, rho, p, mu, xc, yc, xf, yf, dx, dy,
+def gas_forces(law, position, velocity, radius, volume, u, v, voidage, rho, p, mu, xc, yc, xf, yf, dx, dy,
                min_voidage, pressure_force, dim2, out, total):
     """out[q] = gas force on particle q [N]: β V_p/(1 − ε) (u − v_q) (Sun 2007 eq. 29), minus V_p ∇p if
     ``pressure_force`` (eq. 28); z component 0 if ``dim2``.
@@ -172,7 +172,7 @@ def gas_forces(code, position, velocity, radius, volume, u, v, voidage, rho, p, 
         slip = math.sqrt(wx * wx + wy * wy + wz * wz)
         d = 2.0 * radius[q]
         if _drag_arguments_valid(eps, slip, d, rg, mu):
-            c = beta_per_solids(code, eps, slip, d, rg, mu, 1.0) * volume[q]  # β V_p/(1 − ε), eq. 29
+            c = beta_per_solids(law, eps, slip, d, rg, mu, 1.0) * volume[q]  # β V_p/(1 − ε), eq. 29
             fx = c * wx
             fy = c * wy
             fz = c * wz

@@ -195,7 +195,7 @@ def _scatter(A, B, i0, i1, a0, a1, j0, j1, b0, b1, k, vel):
 
 
 @njit(cache=True, error_model="numpy")
-def deposit(code, position, velocity, radius, volume, u, v, voidage, rho, mu, dx, dy, min_voidage, px, py, kp,
+def deposit(law, position, velocity, radius, volume, u, v, voidage, rho, mu, dx, dy, min_voidage, px, py, kp,
             AU, BU, AV, BV, KC, vol, VU, VV, beta_u, su, beta_v, sv, fold, EU, EV, parallel=False):
     """K_p and the face sums of the ``particle`` mode (module docstring); returns the number of
     particles whose drag arguments are out of range (their K_p is NaN, nothing deposited).
@@ -206,7 +206,7 @@ def deposit(code, position, velocity, radius, volume, u, v, voidage, rho, mu, dx
     Σ K_p over the particles whose centre lies in cell (i, j) (for output: Sun 2007 eq. 33's cell β
     times V_cell). What the gas takes: beta_u = AU / V_f, su = BU / AU (0 where AU = 0), and the same on
     the y-faces, with V_f = vol (V_cell) or, with ``fold`` (boundary faces folded, ``_face_axis``), the
-    face volumes VU (nx + 1, ny), VV (nx, ny + 1) of ``face_volumes``.
+    face volumes VU (nx + 1, ny), VV (nx, ny + 1) of ``exchange.face_volumes``.
 
     EU (nx + 1, ny), EV (nx, ny + 1), or both (0, 0) for none: the pressure term's face voidage
     (``pressure_voidage``), deposited in the same pass.
@@ -221,10 +221,10 @@ def deposit(code, position, velocity, radius, volume, u, v, voidage, rho, mu, dx
     n = position.shape[0]
     valid = np.empty(n, dtype=np.bool_)
     if parallel and n > CHUNK:
-        bad = _kp_parallel(code, position, velocity, radius, volume, u, v, voidage, rho, mu, idx, idy, min_voidage,
+        bad = _kp_parallel(law, position, velocity, radius, volume, u, v, voidage, rho, mu, idx, idy, min_voidage,
                            px, py, fold, kp, valid)
     else:
-        bad = _kp_range(0, n, code, position, velocity, radius, volume, u, v, voidage, rho, mu, idx, idy, min_voidage,
+        bad = _kp_range(0, n, law, position, velocity, radius, volume, u, v, voidage, rho, mu, idx, idy, min_voidage,
                         px, py, fold, kp, valid)
     solids = EU.shape[0] > 0
     if solids:
@@ -262,7 +262,7 @@ def deposit(code, position, velocity, radius, volume, u, v, voidage, rho, mu, dx
 
 
 @njit(cache=True, error_model="numpy")
-def _kp_range(lo, hi, code, position, velocity, radius, volume, u, v, voidage, rho, mu, idx, idy, min_voidage, px,
+def _kp_range(lo, hi, law, position, velocity, radius, volume, u, v, voidage, rho, mu, idx, idy, min_voidage, px,
               py, fold, kp, valid):
     """kp[q] of ``deposit`` for particles lo..hi−1, valid[q] whether its drag arguments are in range (else
     kp[q] = NaN); returns the number out of range."""
@@ -292,17 +292,17 @@ def _kp_range(lo, hi, code, position, velocity, radius, volume, u, v, voidage, r
             bad += 1
             kp[q] = math.nan
             continue
-        kp[q] = beta_per_solids(code, eps, slip, d, rg, mu, 1.0) * volume[q]
+        kp[q] = beta_per_solids(law, eps, slip, d, rg, mu, 1.0) * volume[q]
     return bad
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
-def _kp_parallel(code, position, velocity, radius, volume, u, v, voidage, rho, mu, idx, idy, min_voidage, px, py, fold,
+def _kp_parallel(law, position, velocity, radius, volume, u, v, voidage, rho, mu, idx, idy, min_voidage, px, py, fold,
                  kp, valid):
     n = position.shape[0]
     bad = 0
     for c in prange((n + CHUNK - 1) // CHUNK):
-        bad += _kp_range(c * CHUNK, min(n, (c + 1) * CHUNK), code, position, velocity, radius, volume, u, v, voidage,
+        bad += _kp_range(c * CHUNK, min(n, (c + 1) * CHUNK), law, position, velocity, radius, volume, u, v, voidage,
                          rho, mu, idx, idy, min_voidage, px, py, fold, kp, valid)
     return bad
 
@@ -339,7 +339,7 @@ def _face_voidage(E, VF, min_voidage):
 def pressure_voidage(position, volume, dx, dy, px, py, VU, VV, min_voidage, EU, EV):
     """The voidage of the gas's pressure term −ε_p,f ∂p/∂x that pairs the particles' −V_p ∇p_p:
     ε_p,f = 1 − Σ_p w_pf V_p / V_f with the weights w_pf by which ∇p is interpolated to particle p
-    (``_gradient_at``: boundary faces folded) and the face volumes V_f of ``face_volumes`` (VU, VV),
+    (``_gradient_at``: boundary faces folded) and the face volumes V_f of ``exchange.face_volumes`` (VU, VV),
     clipped below at ``min_voidage``.
 
     Then Σ_f (1 − ε_p,f) V_f ∂p/∂x|_f = Σ_p V_p ∂p/∂x|_p: the gas (−ε_p,f ∇p) and the particles
@@ -360,33 +360,6 @@ def pressure_voidage(position, volume, dx, dy, px, py, VU, VV, min_voidage, EU, 
         _add(EV, ci0, ci1, cw0, cw1, fj0, fj1, fv0, fv1, volume[q])
     _face_voidage(EU, VU, min_voidage)
     _face_voidage(EV, VV, min_voidage)
-
-
-def face_volumes(n, periodic, vol):
-    """(nx + 1, ny) x-face and (nx, ny + 1) y-face control volumes [m³] for folded weights (not compiled).
-
-    n = (nx, ny), periodic = (px, py), vol = V_cell. A face's momentum control volume reaches from the
-    centre before it to the centre after it (V_cell); along a non-periodic axis of two cells or more the
-    half cell between the boundary face and the first centre has none of its own, and folding hands its
-    particles to the first interior face (``_face_axis``), so that face's volume counts it too: 1.5 V_cell
-    (2 V_cell for the one interior face of a two-cell axis). With it a face's β = Σ w K_p / V_f and solids
-    fraction Σ w V_p / V_f are those of the region its particles come from (a uniform bed gives the same
-    values on every face), and the pressure at the boundary is the first face's gradient extrapolated over
-    that half cell (``analysis.fluidised.pressure_at_heights``)."""
-    nx, ny = n
-    out = []
-    for shape, axis in (((nx + 1, ny), 0), ((nx, ny + 1), 1)):
-        f = np.ones(shape)
-        m = n[axis]
-        if not periodic[axis] and m >= 2:
-            lo = [slice(None), slice(None)]
-            lo[axis] = 1
-            hi = list(lo)
-            hi[axis] = m - 1
-            f[tuple(lo)] += 0.5
-            f[tuple(hi)] += 0.5
-        out.append(f * vol)
-    return out[0], out[1]
 
 
 @njit(cache=True, inline="always")

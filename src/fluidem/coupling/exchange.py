@@ -1,6 +1,8 @@
 """Two-way coupling of the gas and the particles, one gas step DT at a time.
 
-At the start of every gas step (every ``substeps`` DEM steps):
+The stages of every gas step (every ``substeps`` DEM steps), in the order ``Simulation.step``
+calls them (``map_to_grid``, ``exchange_coefficients``, ``advance_gas``, ``to_particles``,
+``particle_substeps``):
 
 1. particles → grid: voidage ε and cell-averaged solids velocity v_s (``VoidageMapping``,
    Sun 2007 eqs 34-35 / Hoomans 1996 eqs 49-50);
@@ -41,7 +43,7 @@ is ``engine.steps % substeps``, so a run can stop (observers, checkpoints) after
 and continue exactly.
 
 Every step above is one compiled call (``_voidage_kernels.map_solids``, ``_paired_kernels``,
-``_exchange_kernels``), the drag law chosen by its integer code; this module only hands
+``_exchange_kernels``), the drag law passed as its packed row; this module only hands
 them arrays.
 """
 from __future__ import annotations
@@ -67,6 +69,33 @@ def substeps_per_gas_step(gas_dt: float, dem_dt: float) -> int:
     return max(1, math.ceil(gas_dt / dem_dt * (1.0 - 1e-9)))
 
 
+def face_volumes(n, periodic, vol):
+    """(nx + 1, ny) x-face and (nx, ny + 1) y-face control volumes [m³] for folded weights.
+
+    n = (nx, ny), periodic = (px, py), vol = V_cell. A face's momentum control volume reaches from the
+    centre before it to the centre after it (V_cell); along a non-periodic axis of two cells or more the
+    half cell between the boundary face and the first centre has none of its own, and folding hands its
+    particles to the first interior face (``_face_axis``), so that face's volume counts it too: 1.5 V_cell
+    (2 V_cell for the one interior face of a two-cell axis). With it a face's β = Σ w K_p / V_f and solids
+    fraction Σ w V_p / V_f are those of the region its particles come from (a uniform bed gives the same
+    values on every face), and the pressure at the boundary is the first face's gradient extrapolated over
+    that half cell (``analysis.fluidised.pressure_at_heights``)."""
+    nx, ny = n
+    out = []
+    for shape, axis in (((nx + 1, ny), 0), ((nx, ny + 1), 1)):
+        f = np.ones(shape)
+        m = n[axis]
+        if not periodic[axis] and m >= 2:
+            lo = [slice(None), slice(None)]
+            lo[axis] = 1
+            hi = list(lo)
+            hi[axis] = m - 1
+            f[tuple(lo)] += 0.5
+            f[tuple(hi)] += 0.5
+        out.append(f * vol)
+    return out[0], out[1]
+
+
 class GasCoupling:
     """Owns the gas solver and state of a coupled run and drives ``engine`` through gas steps.
 
@@ -83,7 +112,9 @@ class GasCoupling:
         self.section, self.options = case.gas, case.coupling
         self.solver = self.section.build(case.gravity)
         self.grid = self.solver.grid
-        self.drag = self.options.drag_law()
+        self.drag = self.options.drag
+        self._law = self.drag.pack()  # the packed rows the kernels read: the particles' law, the gas's per cell
+        self._gas_law = self.drag.gas_side().pack()
         self.mapping = self.options.voidage
         self.gas_dt = self.section.dt
         self.substeps = substeps_per_gas_step(self.gas_dt, engine.dt)
@@ -112,7 +143,7 @@ class GasCoupling:
                                and self.exchange in ("particle", "cell"))
         self._pressure_voidage = (np.ones(gd.u_shape), np.ones(gd.v_shape))
         # face control volumes with the boundary half cells counted in the first interior faces
-        self._face_volumes = P.face_volumes(gd.shape, self._periodic, gd.cell_volume)
+        self._face_volumes = face_volumes(gd.shape, self._periodic, gd.cell_volume)
         self._no_faces = np.zeros((0, 0))
         if hasattr(engine, "reorder_listeners"):  # per-particle arrays here follow the engine's renumbering
             engine.reorder_listeners.append(self._reorder)
@@ -156,7 +187,7 @@ class GasCoupling:
                              f"got {', '.join(str(f.shape) for f in fields)}")
         self._check_gas()
         beta = np.empty(gd.shape)
-        bad = K.cell_beta(self.drag.cell_code(), st.position, st.radius, self.volume, gs.u, gs.v, gs.rho, *fields,
+        bad = K.cell_beta(self._gas_law, st.position, st.radius, self.volume, gs.u, gs.v, gs.rho, *fields,
                           self.solver.props.viscosity, gd.dx, gd.dy, gd.cell_volume, beta)
         if bad:
             raise ValueError(f"cell β: drag arguments out of range for {bad} particles "
@@ -185,7 +216,7 @@ class GasCoupling:
         if out.shape != st.position.shape or total.shape[0] not in (0, out.shape[0]) or total.shape[1:] != (3,):
             raise ValueError(f"force arrays: out {out.shape}, total {total.shape}; expected (N, 3) with N = "
                              f"{st.position.shape[0]}")
-        bad = K.gas_forces(self.drag.code, st.position, st.velocity, st.radius, self.volume, gs.u, gs.v,
+        bad = K.gas_forces(self._law, st.position, st.velocity, st.radius, self.volume, gs.u, gs.v,
                            gs.voidage, gs.rho, gs.p, self.solver.props.viscosity, *self._nodes, gd.dx, gd.dy,
                            self.mapping.minimum_voidage,
                            bool(self.options.pressure_gradient_force if pressure is None else pressure),
@@ -223,14 +254,25 @@ class GasCoupling:
         self._gas_ok = (gs.p, gs.rho, gs.voidage, gs.u, gs.v)
 
     def gas_step(self) -> None:
-        """Steps 1-4 of the module docstring: map, the gas's β, advance the gas by DT, the particle forces.
+        """The gas's part of one gas step (``Simulation.step``'s first four stages): ``map_to_grid``,
+        ``exchange_coefficients``, ``advance_gas``, ``to_particles``."""
+        smap = self.map_to_grid()
+        self.advance_gas(smap, self.exchange_coefficients(smap))
+        self.to_particles()
+
+    def map_to_grid(self):
+        """Stage 1: particles → grid at the current positions, the ``SolidsMap`` of this gas step."""
+        smap = self._map()
+        self.clipped = smap.clipped
+        return smap
+
+    def exchange_coefficients(self, smap) -> tuple:
+        """Stage 2: the interphase coefficients the gas takes this step, (β, u_s, v_s, pressure voidage):
+        from each particle's drag deposited on the faces ("particle"), or per cell (Sun 2007 eq. 33).
 
         ``last_beta`` of the "particle" exchange is Σ_{p in cell} K_p / V_cell (as Sun 2007 eq. 33 sums
         it; the cell of a particle is floor(x/dx), clipped), for output; the gas itself took the face values."""
         gd = self.grid
-        smap = self._map()
-        self.clipped = smap.clipped
-        t = self.gas_steps * self.gas_dt
         if self.exchange == "particle":
             beta, us, vs = self._deposit(smap.voidage)
         else:
@@ -252,12 +294,38 @@ class GasCoupling:
                 st = self._particles()
                 P.pressure_voidage(st.position, self.volume, gd.dx, gd.dy, *self._periodic, *self._face_volumes,
                                    self.mapping.minimum_voidage, *pv)
+        return beta, us, vs, pv
+
+    def advance_gas(self, smap, coefficients) -> None:
+        """Stage 3: the gas from t to t + DT with the implicit interphase term −β(u − u_s) (Hoomans 1996
+        eqs 42-48)."""
+        beta, us, vs, pv = coefficients
+        t = self.gas_steps * self.gas_dt
         self.last_info = self.solver.advance(self.state, self.gas_dt, t, voidage=smap.voidage, beta=beta,
                                              solids_u=us, solids_v=vs, pressure_voidage=pv)
         self.courant_max = max(self.courant_max, self.last_info.courant)
         self.gas_steps += 1
         self._paired_ready = True
+
+    def to_particles(self) -> None:
+        """Stage 4: grid → particles, the gas force of this step's exchange on each particle (Hoomans 1996
+        eqs 40-41; Sun 2007 eqs 28-29): ``set_particle_forces``."""
         self.set_particle_forces()
+
+    def particle_substeps(self, n: int) -> int:
+        """Stage 5: up to ``n`` DEM sub-steps of the current gas step (n ≤ substeps − phase) in the engine;
+        returns how many were taken. With ``drag_update = "substep"`` on an engine that cannot follow its drag
+        itself (no ``ext_damping``, or the "cell" exchanges), one at a time, the gas force evaluated anew before
+        each but the first of the gas step."""
+        eng = self.engine
+        if self.options.drag_update == "substep" and not self._split:
+            if eng.steps % self.substeps > 0:
+                self.set_particle_forces()
+            n = 1
+        t0 = time.perf_counter()
+        eng.advance(n)
+        self.engine_seconds += time.perf_counter() - t0
+        return n
 
     def _deposit(self, voidage):
         """K_p and the face β, u_s of the "particle" exchange at the current particles and gas (step 2)."""
@@ -266,7 +334,7 @@ class GasCoupling:
         if self._kp.shape != st.radius.shape:
             self._kp = np.zeros(st.radius.shape)
         au, bu_, av, bv_ = self._faces
-        bad = P.deposit(self.drag.code, st.position, st.velocity, st.radius, self.volume, gs.u, gs.v, voidage,
+        bad = P.deposit(self._law, st.position, st.velocity, st.radius, self.volume, gs.u, gs.v, voidage,
                         gs.rho, self.solver.props.viscosity, gd.dx, gd.dy, self.mapping.minimum_voidage,
                         *self._periodic, self._kp, au, bu_, av, bv_, self._kp_cells, gd.cell_volume,
                         *self._face_volumes, self._face_beta[0], self._face_solids[0], self._face_beta[1],
@@ -317,7 +385,7 @@ class GasCoupling:
         For ``"particle"`` and ``"cell"`` gas + boundary = particles to round-off, at the end of the
         gas step (before the DEM sub-steps move the particles). With ``pressure_pairing`` also
         ``pressure_gas``, Σ over the solved faces of (1 − ε_p,f) V_f ∇p_f (V_f of
-        ``_paired_kernels.face_volumes``; the pressure force the gas gives up against a gas of voidage 1),
+        ``face_volumes``; the pressure force the gas gives up against a gas of voidage 1),
         and ``pressure_particles``, Σ_p V_p ∇p_p: equal to round-off."""
         gd, gs = self.grid, self.state
         if self.last_beta is None:
@@ -362,26 +430,6 @@ class GasCoupling:
             out["pressure_gas"] = np.array([((1.0 - eu) * vu * gx)[solved_u].sum(),
                                             ((1.0 - ev) * vv * gy)[solved_v].sum()])
         return out
-
-    # ------------------------------------------------------------ stepping
-    def advance(self, nsteps: int) -> None:
-        """Advance the coupled system by ``nsteps`` DEM steps (any number; gas steps at multiples of substeps)."""
-        eng = self.engine
-        left = nsteps
-        while left > 0:
-            phase = eng.steps % self.substeps
-            if phase == 0:
-                self.gas_step()
-            if self.options.drag_update == "substep" and not self._split:
-                if phase > 0:
-                    self.set_particle_forces()
-                n = 1
-            else:
-                n = min(left, self.substeps - phase)
-            t0 = time.perf_counter()
-            eng.advance(n)
-            self.engine_seconds += time.perf_counter() - t0
-            left -= n
 
     # ------------------------------------------------------------ checkpoint
     def checkpoint_arrays(self) -> dict[str, np.ndarray]:

@@ -1,6 +1,7 @@
 """The ``[coupling]`` section of a case: how gas and particles exchange momentum.
 
-``drag`` names a closure of the ``drag_laws`` registry; ``voidage`` is the particle → grid
+``drag`` is a closure of the ``drag_laws`` registry: a table with the law's ``model`` name and its own
+parameters (``drag = { model = "beetstra" }``), or the bare name (``drag = "beetstra"``); ``voidage`` is the particle → grid
 mapping (``VoidageMapping``: method, smoothing, velocity weighting, minimum voidage);
 ``pressure_gradient_force`` adds −V_p ∇p to each particle (Sun 2007 eq. 28);
 ``momentum_exchange`` says how drag passes between the phases (``exchange.py``):
@@ -28,7 +29,7 @@ along it takes the gas velocity of the first interior face and hands its drag to
 ``"exchange"`` it interpolates towards the boundary's velocity and the drag on the boundary
 face is momentum exchanged with the boundary: the gas pressure then does not carry the
 weight that particles near an inflow put there (the fluidised bed's pressure drop was 4-5 %
-below its weight over area, issue 4). ``pressure_pairing`` (default true, with
+below its weight over area). ``pressure_pairing`` (default true, with
 ``pressure_gradient_force``): the gas's −ε∇p takes on each face the voidage 1 − Σ_p w_pf V_p / V_f
 (``_paired_kernels.pressure_voidage``) instead of the mean of the mapped cell voidages, so that
 the pressure force is exchanged as exactly as the drag (exactly with ``"fold"``: with ``"exchange"`` the
@@ -47,12 +48,22 @@ Example (TOML)::
 """
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal, Union
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
 
 from .drag import DragLaw, drag_laws
 from .voidage import VoidageMapping
+
+
+def _named(value):
+    """A bare law name reads as the table ``{model = name}``."""
+    return {"model": value} if isinstance(value, str) else value
+
+
+# every registered drag law, chosen by its ``model`` key (the registry is the only list of laws)
+DragLawChoice = Annotated[Union[tuple(drag_laws.get(n) for n in drag_laws.names())], Field(discriminator="model"),
+                          BeforeValidator(_named)]
 
 
 class CouplingSection(BaseModel):
@@ -60,7 +71,8 @@ class CouplingSection(BaseModel):
 
     model_config = ConfigDict(extra="forbid", validate_assignment=True)
 
-    drag: str = Field("hoomans1996", description="drag law by name (drag_laws registry)")
+    drag: DragLawChoice = Field(default_factory=lambda: drag_laws.get("hoomans1996")(),
+                                description="drag law: a table with its model name and parameters, or the name")
     voidage: VoidageMapping = Field(default_factory=VoidageMapping, description="particle → grid mapping")
     pressure_gradient_force: bool = Field(True, description="add −V_p ∇p to each particle (Sun 2007 eq. 28)")
     momentum_exchange: Literal["particle", "cell", "cell_beta"] = Field(
@@ -78,26 +90,21 @@ class CouplingSection(BaseModel):
                           "the −V_p ∇p the particles gain (with pressure_gradient_force; particle and cell "
                           "exchange)")
 
-    @field_validator("drag")
-    @classmethod
-    def _known(cls, v):
-        if v not in drag_laws:
-            raise ValueError(f"unknown drag law {v!r}; allowed: {', '.join(drag_laws.names())}")
-        return v
-
     @model_validator(mode="after")
     def _total_force_alone(self):
         """A law giving the total gas force (``hoomans1996_total``) already holds the pressure part."""
-        if drag_laws.get(self.drag).total_force:
+        name = self.drag.model
+        if self.drag.total_force:
             if self.pressure_gradient_force:
-                raise ValueError(f"drag = {self.drag!r} gives the total gas force on a particle (Hoomans 1996 "
+                raise ValueError(f"drag = {name!r} gives the total gas force on a particle (Hoomans 1996 "
                                  "eqs 34-35, pressure part included): set pressure_gradient_force = false "
                                  "(got true)")
             if self.momentum_exchange != "cell_beta":
-                raise ValueError(f"drag = {self.drag!r} gives the total gas force on a particle, which the gas "
+                raise ValueError(f"drag = {name!r} gives the total gas force on a particle, which the gas "
                                  f"(−ε∇p) cannot take back as its opposite: momentum_exchange must be 'cell_beta' "
                                  f"(the gas takes β of Hoomans eqs 45-47 per cell), got {self.momentum_exchange!r}")
         return self
 
     def drag_law(self) -> DragLaw:
-        return drag_laws.get(self.drag)()
+        """The drag law of this section (``drag``)."""
+        return self.drag

@@ -234,7 +234,7 @@ class StaggeredGrid:
 def check_sides(boundaries: Mapping[str, object]) -> None:
     """Raise ``CaseError`` unless ``boundaries`` names exactly the four sides with valid objects,
     and periodic sides come in opposite pairs."""
-    from .boundaries import BoundaryCondition
+    from .boundaries import BoundaryCondition, boundary_conditions
 
     if not isinstance(boundaries, Mapping):
         raise CaseError(f"gas.boundaries = {boundaries!r}: must be a dict of sides {list(SIDES)}")
@@ -247,8 +247,8 @@ def check_sides(boundaries: Mapping[str, object]) -> None:
     for side in SIDES:
         bc = boundaries[side]
         if not isinstance(bc, BoundaryCondition):
-            raise CaseError(f"gas.boundaries.{side} = {bc!r}: must be one of Wall(), FreeSlip(), Inflow(...), "
-                            "PressureOutlet(...), Outflow(), Periodic()")
+            kinds = ", ".join(f"{boundary_conditions.get(n).__name__}(...)" for n in boundary_conditions.names())
+            raise CaseError(f"gas.boundaries.{side} = {bc!r}: must be one of {kinds}")
     for a, b in (("left", "right"), ("bottom", "top")):
         pa, pb = boundaries[a].flag == PERIODIC, boundaries[b].flag == PERIODIC
         if pa != pb:

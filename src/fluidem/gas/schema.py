@@ -1,7 +1,8 @@
 """The ``[gas]`` section of a case: grid, properties, named boundary sides, initial velocity, time step DT.
 
-Every boundary side names its condition by ``kind`` from the ``boundary_conditions``
-registry (``gas/boundaries.py``); the keys a kind accepts are listed in ``KIND_KEYS``.
+Every boundary side is a condition of the ``boundary_conditions`` registry (``gas/boundaries/``),
+chosen by its ``kind``: the objects a case holds are the ones the solver takes (``Wall()``,
+``Inflow(...)`` in Python; ``{kind = "wall"}``, ``{kind = "inflow", ...}`` in TOML), each with its own keys.
 ``GasSection.build(gravity)`` gives the ``GasSolver``; the section is validated by
 building its parts once, so a case that loads also builds.
 
@@ -34,18 +35,14 @@ A velocity may change in time: ``{pulse = 2.5, start = 0.0, duration = 0.2, othe
 """
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal, Union
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from ..errors import CaseError
-from .boundaries import Inflow, PressureOutlet, Pulse, Segment, Table, boundary_conditions
-from .grid import SIDES, StaggeredGrid
+from .boundaries import boundary_conditions
+from .grid import PERIODIC, SIDES, StaggeredGrid
 from .solver import GasProperties, GasSolver
-
-# keys each boundary kind accepts besides ``kind``
-KIND_KEYS = {"inflow": ("segments", "voidage", "superficial", "interstitial"), "pressure_outlet": ("pressure",)}
-
 
 class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", validate_assignment=True)
@@ -83,95 +80,9 @@ class PropertiesSpec(_Strict):
         return GasProperties(**self.model_dump())
 
 
-class PulseSpec(_Strict):
-    """A velocity ``pulse`` [m/s] for start <= t < start + duration, ``otherwise`` outside (``Pulse``)."""
-
-    pulse: float
-    start: float = Field(0.0, description="[s]")
-    duration: float = Field(gt=0.0, description="[s]")
-    otherwise: float = Field(0.0, description="[m/s]")
-
-    def build(self) -> Pulse:
-        return Pulse(self.pulse, start=self.start, duration=self.duration, otherwise=self.otherwise)
-
-
-class TableSpec(_Strict):
-    """A velocity linear in time between ``[t, value]`` points, constant beyond the ends (``Table``)."""
-
-    table: list[tuple[float, float]] = Field(min_length=1, description="[[t (s), velocity (m/s)], ...]")
-
-    def build(self) -> Table:
-        return Table(tuple(self.table))
-
-
-Velocity = float | PulseSpec | TableSpec
-
-
-def _fastest(value) -> float:
-    """Largest |velocity| [m/s] a velocity spec takes at any time."""
-    if isinstance(value, PulseSpec):
-        return max(abs(value.pulse), abs(value.otherwise))
-    if isinstance(value, TableSpec):
-        return max(abs(v) for _, v in value.table)
-    return abs(float(value))
-
-
-def _velocity(value):
-    return value.build() if isinstance(value, (PulseSpec, TableSpec)) else value
-
-
-class SegmentSpec(_Strict):
-    """One stretch of an inflow side (``Segment``): exactly one of interstitial / superficial [m/s]."""
-
-    interstitial: Velocity | None = None
-    superficial: Velocity | None = None
-    start: float | None = Field(None, description="[m] along the side (x on bottom/top, y on left/right)")
-    end: float | None = None
-
-
-class BoundarySpec(_Strict):
-    """A condition on one side, chosen by ``kind`` from the gas boundary-condition registry."""
-
-    kind: str
-    segments: list[SegmentSpec] | None = None
-    voidage: float | None = Field(None, description="inflow: voidage of the influx cells [-]")
-    superficial: Velocity | None = Field(None, description="inflow: superficial velocity over the whole side [m/s]")
-    interstitial: Velocity | None = Field(None, description="inflow: interstitial velocity over the whole side [m/s]")
-    pressure: float | None = Field(None, description="pressure_outlet: pressure [Pa]; default reference_pressure")
-
-    @field_validator("kind")
-    @classmethod
-    def _known(cls, v):
-        if v not in boundary_conditions:
-            raise ValueError(f"unknown gas boundary kind {v!r}; allowed: {', '.join(boundary_conditions.names())}")
-        return v
-
-    @model_validator(mode="after")
-    def _check(self):
-        allowed = KIND_KEYS.get(self.kind, ())
-        given = [k for k in ("segments", "voidage", "superficial", "interstitial", "pressure")
-                 if getattr(self, k) is not None]
-        extra = [k for k in given if k not in allowed]
-        if extra:
-            what = f"allowed: {', '.join(allowed)}" if allowed else "it takes no other keys"
-            raise ValueError(f"kind {self.kind!r} does not take {', '.join(extra)}; {what}")
-        self.build()
-        return self
-
-    def build(self):
-        cls = boundary_conditions.get(self.kind)
-        try:
-            if cls is Inflow:
-                kw = {k: _velocity(getattr(self, k)) for k in ("voidage", "superficial", "interstitial")
-                      if getattr(self, k) is not None}
-                segs = tuple(Segment(**{k: _velocity(getattr(s, k)) for k in ("interstitial", "superficial")},
-                                     start=s.start, end=s.end) for s in (self.segments or []))
-                return Inflow(segments=segs, **kw)
-            if cls is PressureOutlet:
-                return PressureOutlet(pressure=self.pressure)
-            return cls()
-        except CaseError as err:
-            raise ValueError(str(err)) from None
+# every registered boundary condition, chosen by its ``kind`` key (the registry is the only list of conditions)
+BoundaryChoice = Annotated[Union[tuple(boundary_conditions.get(n) for n in boundary_conditions.names())],
+                           Field(discriminator="kind")]
 
 
 class GasSection(_Strict):
@@ -180,7 +91,7 @@ class GasSection(_Strict):
     dt: float = Field(gt=0.0, description="gas time step DT [s]; the DEM dt is DT / ceil(DT / dt_DEM)")
     grid: GridSpec
     properties: PropertiesSpec = Field(default_factory=PropertiesSpec)
-    boundaries: dict[str, BoundarySpec] = Field(description="a condition on each of left, right, bottom, top")
+    boundaries: dict[str, BoundaryChoice] = Field(description="a condition on each of left, right, bottom, top")
     initial_velocity: tuple[float, float] = Field((0.0, 0.0), description="interstitial gas velocity at t = 0 [m/s]")
     convection: Literal["upwind", "tvd"] = "upwind"
     tolerance: float = Field(1e-10, gt=0.0, lt=1.0, description="mass-residual tolerance of each gas step [-]")
@@ -210,7 +121,7 @@ class GasSection(_Strict):
         missing = [s for s in SIDES if s not in v]
         if missing:
             raise ValueError(f"missing side(s) {', '.join(missing)}: give a kind for each of {', '.join(SIDES)}")
-        periodic = {s for s, b in v.items() if b.kind == "periodic"}
+        periodic = {s for s, b in v.items() if b.flag == PERIODIC}
         for a, b in (("left", "right"), ("bottom", "top")):
             if (a in periodic) != (b in periodic):
                 raise ValueError(f"sides {a} and {b}: periodic needs both opposite sides periodic")
@@ -223,14 +134,10 @@ class GasSection(_Strict):
         be faster still (a jet accelerates through the bed): the run then stops with the Courant number it
         reached, and summary ``gas_courant_max`` tells how close a finished run came."""
         limit = 0.5 if self.convection == "tvd" else 1.0
-        for side, spec in self.boundaries.items():
-            if spec.kind != "inflow":
+        for side, bc in self.boundaries.items():
+            speed = bc.fastest_inflow()
+            if speed == 0.0:
                 continue
-            eps = spec.voidage if spec.voidage is not None else 1.0
-            values = [(spec.interstitial, 1.0), (spec.superficial, eps)]
-            for seg in spec.segments or []:
-                values += [(seg.interstitial, 1.0), (seg.superficial, eps)]
-            speed = max((_fastest(v) / f for v, f in values if v is not None), default=0.0)
             k = 1 if side in ("bottom", "top") else 0
             width = self.grid.size[k] / self.grid.cells[k]
             courant = speed * self.dt / width
@@ -244,6 +151,6 @@ class GasSection(_Strict):
     def build(self, gravity) -> GasSolver:
         """The ``GasSolver`` of this section under ``gravity`` (gx, gy[, 0]) [m/s^2]."""
         return GasSolver(self.grid.build(), self.properties.build(),
-                         {side: b.build() for side, b in self.boundaries.items()},
+                         dict(self.boundaries),
                          gravity=tuple(gravity)[:2], convection=self.convection, tolerance=self.tolerance,
                          linear_solver=self.linear_solver)

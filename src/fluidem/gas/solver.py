@@ -57,7 +57,7 @@ import scipy.sparse.linalg as spla
 from ..errors import CaseError
 from . import _solver_kernels as K
 from ._operators import TVD, UPWIND, centre_to_x_faces, centre_to_y_faces
-from .boundaries import BoundaryCondition, Inflow, PressureOutlet, evaluate
+from .boundaries import BoundaryCondition
 from .grid import (FREE_SLIP, INFLOW, NO_SLIP, OUTFLOW, PERIODIC, PRESSURE, SIDES, StaggeredGrid,
                    check_sides)
 
@@ -356,22 +356,15 @@ class GasSolver:
         self.KV = np.ascontiguousarray(np.stack([vk.T, vs.T]))
         self.ukind, self.ubnd = self.KU[K.K_KIND], self.KU[K.K_SIGN]
         self.vkind, self.vbnd = self.KV[K.K_KIND], self.KV[K.K_SIGN]
-        # inflow: per side the segment weights of its faces
+        # sides with a prescribed normal velocity: t -> velocity of each boundary face (BoundaryCondition)
         self._inflows = []
         for side in SIDES:
             bc = self.boundaries[side]
-            if isinstance(bc, Inflow):
-                weights = bc.face_weights(self.grid.side_faces(side))
-                for k in np.flatnonzero(weights.sum(axis=1) == 0.0):
-                    seg = bc.segments[k]
-                    raise CaseError(f"gas.boundaries.{side}: inflow segment {k} (start = {seg.start}, end = "
-                                    f"{seg.end}) covers no part of the side (0 to {self.grid.side_length(side)} m): "
-                                    "it lies outside it or under later segments")
-                self._inflows.append((side, bc, weights))
-        self._pressure_sides = [(s, bc) for s, bc in self.boundaries.items() if isinstance(bc, PressureOutlet)]
-        self._time_dependent = (any(callable(seg.interstitial) or callable(seg.superficial)
-                                    for _, bc, _ in self._inflows for seg in bc.segments)
-                                or any(callable(bc.pressure) for _, bc in self._pressure_sides))
+            velocity = bc.face_velocity(side, self.grid.side_faces(side))
+            if velocity is not None:
+                self._inflows.append((side, bc, velocity))
+        self._pressure_sides = [(s, bc) for s, bc in self.boundaries.items() if bc.flag == PRESSURE]
+        self._time_dependent = any(bc.time_dependent for bc in self.boundaries.values())
         self.has_outflow = any(bc.flag == OUTFLOW for bc in self.boundaries.values())
 
     def _setup_maps(self):
@@ -404,8 +397,9 @@ class GasSolver:
         self.P, self.RHO, self.E = self.C[K.C_P], self.C[K.C_RHO], self.C[K.C_E]
         self.pfix, self.efix = self.C[K.C_PFIX], self.C[K.C_EFIX]
         self.efix[:] = 1.0
-        for side, bc, _ in self._inflows:
-            self.efix[self._ghost_index(side)] = bc.voidage
+        for side, bc in self.boundaries.items():
+            if bc.flag == INFLOW:
+                self.efix[self._ghost_index(side)] = bc.voidage
 
     @staticmethod
     def _ghost_index(side):
@@ -619,8 +613,8 @@ class GasSolver:
     def _set_boundary_values(self, t: float) -> None:
         """Inflow face velocities (ufix/vfix) and prescribed boundary-cell pressures (pfix) at time t."""
         self._bc_time = t
-        for side, bc, w in self._inflows:
-            vel = w.T @ bc.velocities(t)  # interstitial, positive inward
+        for side, _, velocity in self._inflows:
+            vel = velocity(t)  # interstitial, positive inward
             if side == "left":
                 self.ufix[0] = vel
             elif side == "right":
@@ -630,7 +624,8 @@ class GasSolver:
             else:
                 self.vfix[:, -1] = -vel
         for side, bc in self._pressure_sides:
-            p = self.props.reference_pressure if bc.pressure is None else evaluate(bc.pressure, t)
+            p = bc.prescribed_pressure(t)
+            p = self.props.reference_pressure if p is None else p
             self.pfix[self._ghost_index(side)] = p - self.props.reference_pressure  # gauge
 
     # ------------------------------------------------------------ initial state
@@ -648,7 +643,8 @@ class GasSolver:
         sides = sorted(self._pressure_sides, key=lambda s: s[0] != "top")
         if sides:
             side, bc = sides[0]
-            p_a = self.props.reference_pressure if bc.pressure is None else evaluate(bc.pressure, t)
+            p_a = bc.prescribed_pressure(t)
+            p_a = self.props.reference_pressure if p_a is None else p_a
             x_a, y_a = {"left": (-0.5 * gd.dx, 0.5 * gd.size[1]), "right": (gd.size[0] + 0.5 * gd.dx, 0.5 * gd.size[1]),
                         "bottom": (0.5 * gd.size[0], -0.5 * gd.dy),
                         "top": (0.5 * gd.size[0], gd.size[1] + 0.5 * gd.dy)}[side]
@@ -1145,7 +1141,7 @@ def gas_step_benchmark(grids=((15, 25), (39, 60), (150, 300)), seconds: float = 
 
 def _bench_problem(nx: int, ny: int, convection: str = "upwind", linear_solver: str = "auto"):
     """Solver, state, β(state) and voidage(t) of the benchmark bed on an nx × ny grid."""
-    from .boundaries import Segment, Wall
+    from .boundaries import Inflow, PressureOutlet, Segment, Wall
 
     grid = StaggeredGrid(cells=(nx, ny), size=(0.15, 0.5), depth=0.004)
     props = GasProperties()

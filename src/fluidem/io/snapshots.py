@@ -5,7 +5,8 @@ diameter, species, id}`` plus the writer's extra fields (e.g. ``contacts`` N_c,
 ``contact_force``, ``gas_force``), with attributes ``time`` [s] and ``step``. ``particles.xdmf`` is a temporal
 collection of Polyvertex grids pointing at those datasets; each snapshot appends its grid
 in one write (``io/xdmf.py``), so it is valid between snapshots, and it is written whole again on
-resume.
+resume. ``snapshot_index``, ``snapshot_fields``, ``read_snapshot`` and ``iter_snapshots`` read the
+file back.
 """
 from __future__ import annotations
 
@@ -17,6 +18,9 @@ import numpy as np
 from ..schedule import EveryTime
 from .atomic import write_text_atomic
 from .xdmf import XdmfIndex, document
+
+SNAPSHOT_FILE = "particles.h5"
+SNAPSHOT_INDEX = "particles.xdmf"
 
 FIELDS = {  # name: (xdmf attribute type, components)
     "velocity": ("Vector", 3),
@@ -31,8 +35,8 @@ class ParticleWriter:
     """Observer writing particle snapshots; ``schedule`` decides when."""
 
     def __init__(self, out_dir: Path, schedule=None, extra_fields=None):
-        self.path = Path(out_dir) / "particles.h5"
-        self.xdmf = Path(out_dir) / "particles.xdmf"
+        self.path = Path(out_dir) / SNAPSHOT_FILE
+        self.xdmf = Path(out_dir) / SNAPSHOT_INDEX
         self.schedule = schedule or EveryTime(0.01)
         self.extra_fields = extra_fields or {}
         # (key, time) of the file's snapshots: read from the file once, then kept up to date here (reading
@@ -52,7 +56,7 @@ class ParticleWriter:
             key = f"{len(grp):06d}"
             g = grp.create_group(key)
             g.attrs["time"] = sim.time
-            g.attrs["step"] = sim.step
+            g.attrs["step"] = sim.steps
             # rows in the order of the particles' ids (a soft-sphere engine may renumber its particles in
             # cell order, state.ids follows them): row k is particle k in every snapshot
             by_id = _id_order(st.ids)
@@ -155,11 +159,62 @@ def xdmf_text(h5name: str, times: list[tuple[str, float]], n: int, fields=None) 
     return document("particles", [grid_text(h5name, key, t, n, fields) for key, t in times])
 
 
-def read_snapshot(path: Path, index: int = -1) -> dict:
-    """One snapshot as a dict of arrays (plus ``time``), for analysis and tests."""
-    with h5py.File(path, "r") as f:
-        keys = sorted(f["snapshots"])
-        g = f["snapshots"][keys[index]]
+def _snapshot_file(path: str | Path) -> Path:
+    """``path`` itself, or the ``particles.h5`` in it when it is a run directory."""
+    path = Path(path)
+    return path / SNAPSHOT_FILE if path.is_dir() else path
+
+
+def _snapshots_group(f: h5py.File):
+    """The ``/snapshots`` group of an open ``particles.h5``; KeyError without one."""
+    grp = f.get("snapshots")
+    if grp is None:
+        raise KeyError(f"{Path(f.filename).name} has no /snapshots group")
+    return grp
+
+
+def snapshot_index(path: str | Path) -> list[tuple[str, float]]:
+    """(group key, time [s]) of every snapshot of a ``particles.h5``, in order.
+
+    ``path`` is a run directory or the file. Raises ``FileNotFoundError`` (``OSError``) without a
+    readable file and ``KeyError`` when it has no ``/snapshots`` group or a snapshot no time.
+    """
+    with h5py.File(_snapshot_file(path), "r") as f:
+        return _times(_snapshots_group(f))
+
+
+def snapshot_fields(path: str | Path, index: int = 0) -> tuple[str, ...]:
+    """Names of the datasets of snapshot ``index`` of a ``particles.h5``, sorted; nothing else is read.
+    Raises as ``read_snapshot`` does."""
+    with h5py.File(_snapshot_file(path), "r") as f:
+        grp = _snapshots_group(f)
+        return tuple(grp[sorted(grp)[index]])
+
+
+def read_snapshot(path: str | Path, index: int = -1) -> dict:
+    """Snapshot ``index`` (negative counts from the end) of a ``particles.h5``: its datasets as arrays by
+    name (``position`` (N, 3) [m], ``velocity`` (N, 3) [m/s], ``diameter`` (N,) [m], ``species``, ``id``
+    and the writer's extra fields) plus ``time`` [s]. ``path`` is a run directory or the file.
+    Raises as ``snapshot_index`` does, and ``IndexError`` for an index the file does not have."""
+    with h5py.File(_snapshot_file(path), "r") as f:
+        grp = _snapshots_group(f)
+        g = grp[sorted(grp)[index]]
         out = {k: np.asarray(g[k]) for k in g}
         out["time"] = float(g.attrs["time"])
     return out
+
+
+def iter_snapshots(path: str | Path, fields=None, indices=None):
+    """Yield (time [s], {field: array}) for every snapshot of a ``particles.h5`` in order (or those at
+    ``indices``), opening the file once.
+
+    ``fields``: the dataset names to read (default all); a snapshot without one leaves it out.
+    ``path`` is a run directory or the file. Raises as ``snapshot_index`` and ``read_snapshot`` do.
+    """
+    with h5py.File(_snapshot_file(path), "r") as f:
+        grp = _snapshots_group(f)
+        keys = sorted(grp)
+        for k in range(len(keys)) if indices is None else indices:
+            g = grp[keys[k]]
+            names = list(g) if fields is None else [name for name in fields if name in g]
+            yield float(g.attrs["time"]), {name: np.asarray(g[name]) for name in names}

@@ -52,6 +52,8 @@ import numpy as np
 from numba import njit
 
 from ._neighbours_kernels import _csr_of_pairs, build_pairs
+from .contact.base import SLOT_FRICTION
+from .contact.hard_sphere import NO_COLLISION, SLIDING, SLOT_COLLAPSE_TIME, SLOT_RESTITUTION, STICKING, impulse
 
 # predicted-event codes in ev[:, 0]: >= 0 partner particle, then:
 NO_EVENT = -1
@@ -66,11 +68,6 @@ E_NORMAL, E_TANGENTIAL = 0, 1
 N_ENERGIES = 2
 # status
 OK, TOO_MANY_EVENTS = 0, 1
-# collision classes
-NO_COLLISION, SLIDING, STICKING = 0, 1, 2
-
-# packed contact rows (contact/hard_sphere.py)
-SLOT_RESTITUTION, SLOT_COLLAPSE_TIME, SLOT_FRICTION = 1, 2, 7
 
 SKIN_MARGIN = 1.0 - 1e-9  # the skin event fires a hair before the displacement reaches skin/2
 
@@ -138,68 +135,7 @@ def upper_half(start, nbr):
     return up_start, up[:k]
 
 
-# ---------------------------------------------------------------- collision law
-@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
-def impulse(nx, ny, nz, ux, uy, uz, inv_ma, inv_mb, ka, kb, e, mu):
-    """Impulse on body a of a binary collision (Hoomans 1996 eqs 10–29, slip as a vector).
-
-    n : unit normal from b to a; u : velocity of a's contact point relative to b's
-    (u·n < 0 approaching); inv_m : 1/m [1/kg] (0 for a wall); k = R²/I [1/kg] (0 for a wall).
-
-    Returns (P_n, P_t (3), E_n, E_t, kind): normal impulse magnitude along n [N s],
-    tangential impulse on a [N s], energy dissipated by each part [J], and the class:
-    SLIDING (eq. 24), STICKING (eq. 25) or NO_COLLISION when u·n >= 0.
-    """
-    c0 = ux * nx + uy * ny + uz * nz  # compression velocity C_0, eq. 14 (spin adds nothing along n)
-    if c0 >= 0.0:  # not approaching (round-off after the prediction): no impulse
-        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, NO_COLLISION
-    sx = ux - c0 * nx  # initial slip S_0, eq. 11 as a vector in the tangent plane
-    sy = uy - c0 * ny
-    sz = uz - c0 * nz
-    b2 = inv_ma + inv_mb  # eq. 15
-    b1 = b2 + ka + kb  # eq. 12
-    pn = -(1.0 + e) * c0 / b2  # eq. 22
-    en = c0 * c0 / (2.0 * b2) * (1.0 - e * e)  # eq. 23
-    s = math.sqrt(sx * sx + sy * sy + sz * sz)
-    if s >= mu * b1 * pn:  # sliding, eq. 24
-        if s > 0.0:
-            f = -mu * pn / s  # eq. 26: P_t = −μ P_n ŝ
-            ptx = f * sx
-            pty = f * sy
-            ptz = f * sz
-        else:
-            ptx = 0.0
-            pty = 0.0
-            ptz = 0.0
-        et = -mu * (1.0 + e) * c0 / b2 * (s + mu * b1 * (1.0 + e) * c0 / (2.0 * b2))  # eq. 27
-        return pn, ptx, pty, ptz, en, et, SLIDING
-    # sticking, eq. 25: the slip ends at zero
-    ptx = -sx / b1  # eq. 28
-    pty = -sy / b1
-    ptz = -sz / b1
-    et = s * s / (2.0 * b1)  # eq. 29
-    return pn, ptx, pty, ptz, en, et, STICKING
-
-
 # ---------------------------------------------------------------- packed per-particle records
-def workspace(n):
-    """The work arrays of ``advance`` for n particles, (P, Q, R, ev, ev_time, ncoll, T, X, F, M). The engine keeps
-    them between calls: fresh ones would be fresh pages of memory, and their page faults cost more than a
-    step of a small bed. P's rows start on 64-byte boundaries (one cache line each). M (2,) int64 says whether R
-    still holds what ``_set_reference`` makes of the ``ref_pos`` a call returned (M[0] = 1) and for which
-    ``planar`` (M[1]): ``advance`` then skips it (a coupled run calls ``advance`` once per step, and R changes
-    only at a list rebuild). A fresh workspace has M[0] = 0, so an engine that replaces ``ref_pos`` (a restore)
-    makes a fresh one."""
-    L = 1
-    while L < n:
-        L *= 2
-    buf = np.empty(P_ROW * n + 8)
-    off = (-buf.ctypes.data % 64) // 8
-    P = buf[off:off + P_ROW * n]
-    return (P, np.empty((n, 8)), np.empty(R_ROW * n), np.empty((n, 2), np.int64), np.empty(n), np.empty(n, np.int64),
-            np.empty(4 * L), np.empty((n, 3)), np.empty(n), np.zeros(2, np.int64))
-
-
 @njit(cache=True, error_model="numpy")
 def set_forces(mass, gravity, ext_force, force, torque):
     """force = m g + ext_force (the finite forces of eq. 34), torque = 0 (none between collisions)."""
@@ -742,7 +678,7 @@ def advance(pos, vel, omega, radius, inv_mass, inv_inertia, species, pp, pw, wal
     log : (L, 5) float64; the first L collisions after counters[C_LOGGED] = 0 are recorded as
         (absolute time, a, b or WALL_EVENT0 − w, E_n, E_t)
     info : (3,) float64, on failure (step index, time in step, events)
-    work : ``workspace(N)``
+    work : ``hardsphere.workspace(N)``
 
     Returns (nbr_start, nbr, up_start, up, status); status OK or TOO_MANY_EVENTS. On OK, pos, vel, omega,
     ref_pos and last_coll hold the new state; on TOO_MANY_EVENTS they are left as they were

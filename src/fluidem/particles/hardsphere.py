@@ -17,11 +17,29 @@ from ..state import ParticleState
 from . import _hardsphere_kernels as K
 from .contact.base import N_SLOTS
 from .contact.hard_sphere import HardSphere
-from .softsphere import SoftSphereEngine, restore_state, set_up_particles
+from .engine import ParticleEngine
 from .walls import build_walls
 
 DEFAULT_DT = 1e-4  # s, Hoomans 1996 DT (Table 2, §5.1)
 DEFAULT_SKIN_DIAMETERS = 0.5  # neighbour-list skin in largest diameters when neighbours.skin is not given
+
+
+def workspace(n: int) -> tuple:
+    """The work arrays of ``_hardsphere_kernels.advance`` for n particles, (P, Q, R, ev, ev_time, ncoll, T, X, F, M).
+    The engine keeps them between calls: fresh ones would be fresh pages of memory, and their page faults cost
+    more than a step of a small bed. P's rows start on 64-byte boundaries (one cache line each). M (2,) int64
+    says whether R still holds what ``_set_reference`` makes of the ``ref_pos`` a call returned (M[0] = 1) and
+    for which ``planar`` (M[1]): ``advance`` then skips it (a coupled run calls ``advance`` once per step, and R
+    changes only at a list rebuild). A fresh workspace has M[0] = 0, so an engine that replaces ``ref_pos`` (a
+    restore) makes a fresh one."""
+    size = 1  # the smallest power of two >= n: the event tree's leaves
+    while size < n:
+        size *= 2
+    buf = np.empty(K.P_ROW * n + 8)
+    off = (-buf.ctypes.data % 64) // 8
+    P = buf[off:off + K.P_ROW * n]
+    return (P, np.empty((n, 8)), np.empty(K.R_ROW * n), np.empty((n, 2), np.int64), np.empty(n),
+            np.empty(n, np.int64), np.empty(4 * size), np.empty((n, 3)), np.empty(n), np.zeros(2, np.int64))
 
 
 class CollisionCascadeError(FloatingPointError):
@@ -32,7 +50,7 @@ class CollisionCascadeError(FloatingPointError):
     """
 
 
-class HardSphereEngine:
+class HardSphereEngine(ParticleEngine):
     """Hard-sphere particles with instantaneous binary collisions (Hoomans 1996 §2.3–2.5).
 
     Attributes besides the soft-sphere interface (``case, dim2, walls, state, inv_mass,
@@ -51,20 +69,18 @@ class HardSphereEngine:
     row_start, partner, wall_hist, pw : what ``analysis.probes`` reads (no lasting contacts)
     """
 
-    law_for_pair = SoftSphereEngine.law_for_pair  # species-pair overrides, exactly as for soft spheres
-    law_for_wall = SoftSphereEngine.law_for_wall  # wall_contact, per-wall contact, wall_pairs
+    contact_forces = False  # collisions pass momentum as impulses
 
     def __init__(self, case, state: ParticleState | None = None):
-        self.case = case
-        self.dim2 = case.particles.dimensions == 2
-        self.walls = build_walls(case)
-        self.wall_point0, self.wall_normal, self.wall_motion = self.walls.arrays()
-        for k, plane in enumerate(self.walls.planes):
-            if int(self.wall_motion[k, 0]) != 0:
+        walls = build_walls(case)
+        motion = walls.arrays()[2]
+        for k, plane in enumerate(walls.planes):
+            if int(motion[k, 0]) != 0:
                 raise CaseError(
                     f"walls: wall {plane.source.name!r} moves ({plane.source.motion.kind}); the hard-sphere engine "
                     f"supports static walls only; remove its motion or use a soft-sphere contact model")
-        st = set_up_particles(self, case, state)
+        super().__init__(case, state)
+        st = self.state
         self.pp, self.pw = self._contact_tables()
         self.dt = case.time.dt if case.time.dt is not None else DEFAULT_DT
         dmax = 2.0 * float(st.radius.max()) if st.n else 0.0
@@ -116,30 +132,13 @@ class HardSphereEngine:
                             f"model = 'hard_sphere' for every pair and wall")
         return law
 
-    def check_initial_overlaps(self, tolerance: float = 1e-9) -> None:
-        """Raise CaseError if two particles, or a particle and a wall, overlap at the start."""
+    def _touching_pairs(self) -> tuple[np.ndarray, np.ndarray]:
         st = self.state
         rs, nbr = K.build_neighbours(st.position, st.radius, 0.0, self.dim2)
-        if nbr.size:
-            i = np.repeat(np.arange(st.n), np.diff(rs))
-            j = nbr.astype(np.int64)
-            keep = i < j
-            i, j = i[keep], j[keep]
-            d = np.linalg.norm(st.position[i] - st.position[j], axis=1)
-            ov = st.radius[i] + st.radius[j] - d
-            bad = np.flatnonzero(ov > tolerance * (st.radius[i] + st.radius[j]))
-            if bad.size:
-                k = bad[np.argmax(ov[bad])]
-                raise CaseError(
-                    f"particles.placement: initial particles overlap: {bad.size} pair(s), e.g. particles {i[k]} and "
-                    f"{j[k]} by {ov[k]:.3g} m; particles must start apart")
-        for plane in self.walls.planes:
-            gap = (st.position - plane.point) @ plane.normal - st.radius
-            bad = np.flatnonzero(gap < -tolerance * st.radius)
-            if bad.size:
-                raise CaseError(
-                    f"particles.placement: initial particles cross wall {plane.name}: {bad.size} particle(s), e.g. "
-                    f"particle {bad[0]} by {-gap[bad[0]]:.3g} m")
+        i = np.repeat(np.arange(st.n), np.diff(rs))
+        j = nbr.astype(np.int64)
+        keep = i < j
+        return i[keep], j[keep]
 
     def record_collisions(self, capacity: int) -> None:
         """Record the next ``capacity`` collisions in ``event_log`` (for tests and analysis).
@@ -172,7 +171,7 @@ class HardSphereEngine:
         counters, energy = self.counters.copy(), self.energy.copy()
         info = np.zeros(3)
         if self._work is None or self._work[0].shape[0] != K.P_ROW * st.n:
-            self._work = K.workspace(st.n)
+            self._work = workspace(st.n)
         nbr_start, nbr, up_start, up, status = K.advance(
             st.position, st.velocity, st.omega, st.radius, self.inv_mass, self.inv_inertia, st.species, self.pp,
             self.pw, self.wall_point0, self.wall_normal, self.gravity, self.ext_force, self.dim2, self.nbr_start,
@@ -245,6 +244,31 @@ class HardSphereEngine:
         return {"kinetic_J": ke, "rotational_J": re, "potential_J": pe, "dissipated_J": diss,
                 "total_J": ke + re + pe + diss}
 
+    def bookkeeping(self) -> dict[str, float]:
+        """Hoomans 1996 eq. 51's energy housekeeping: dissipated energy (eqs 23, 27, 29), the total
+        E_kin + E_pot + E_rot + E_dsp [J], and the collision counts."""
+        e = self.energies()
+        diss_n, diss_t = self.dissipated_normal_J, self.dissipated_tangential_J
+        return {"dissipated_normal_J": diss_n, "dissipated_tangential_J": diss_t,
+                "total_energy_J": e["kinetic_J"] + e["rotational_J"] + e["potential_J"] + diss_n + diss_t,
+                "collisions": self.collisions, "wall_collisions": self.wall_collisions,
+                "remedy_count": self.remedy_count}
+
+    def summary_entries(self, wall_time: float, particle_time: float, energy0: float | None,
+                        coupled: bool) -> dict:
+        """Collisions (in all, per second of the run and per second of this engine), the TC remedy's uses, the
+        energy dissipated, and without gas Hoomans 1996 eq. 51's relative energy error."""
+        h = self.bookkeeping()
+        out = {"collisions": h["collisions"], "wall_collisions": h["wall_collisions"],
+               "collisions_per_s": h["collisions"] / wall_time if wall_time > 0 else None,
+               "collisions_per_particle_s": h["collisions"] / particle_time if particle_time > 0 else None,
+               "collapse_remedy_count": h["remedy_count"],
+               "dissipated_energy_J": h["dissipated_normal_J"] + h["dissipated_tangential_J"]}
+        if energy0 and not coupled:  # with gas, the gas does work on the particles
+            # Hoomans 1996 eq. 51: relative error of E_kin + E_pot + E_rot + E_dsp
+            out["energy_error_rel"] = abs(h["total_energy_J"] - energy0) / abs(energy0)
+        return out
+
     # ------------------------------------------------------------ checkpoint
     def checkpoint_arrays(self) -> dict[str, np.ndarray]:
         """Everything needed to continue bit-for-bit."""
@@ -261,7 +285,7 @@ class HardSphereEngine:
                 "skin": self.skin}
 
     def restore(self, arrays: dict[str, np.ndarray], scalars: dict) -> None:
-        restore_state(self, arrays)
+        self.restore_state(arrays)
         for k in ("ref_pos", "last_collision", "ext_force", "counters", "energy"):
             getattr(self, k)[...] = arrays[f"engine/{k}"]
         self.nbr_start = np.ascontiguousarray(arrays["engine/nbr_start"], dtype=np.int64)

@@ -16,8 +16,7 @@ from ..state import ParticleState
 from . import _softsphere_kernels as K
 from ._neighbours_kernels import build_pairs, contacts_first
 from .contact.base import N_SLOTS
-from .placement import place
-from .walls import build_walls
+from .engine import ParticleEngine
 
 STABILITY_FRACTION = 0.1  # dt must stay below t_c / 10: at least ten steps per contact
 # default renumbering in cell order (neighbours.reorder_interval): every 1000 steps, at the next list rebuild
@@ -26,57 +25,16 @@ REORDER_INTERVAL = 1000
 REORDER_MIN_PARTICLES = 1000
 
 
-
-def set_up_particles(engine, case, state: ParticleState | None) -> ParticleState:
-    """The particle part of an engine's set-up, shared by the soft- and hard-sphere engines: the state
-    (``state``, or placed by the case inside ``engine.walls``), inverse mass and inertia, gravity and a
-    zero external force on ``engine``. Returns the state."""
-    if state is None:
-        pos, vel, diam, spec = place(case, engine.walls)
-        dens = np.array([s.density for s in case.particles.species])
-        state = ParticleState.create(pos, vel, diam, spec, dens)
-    engine.state = state
-    _derive_inverses(engine)
-    engine.gravity = np.array(case.gravity, float)
-    engine.ext_force = np.zeros_like(state.position)
-    return state
-
-
-def _derive_inverses(engine) -> None:
-    """The engine's 1/m and 1/I per particle, from its state."""
-    engine.inv_mass = 1.0 / engine.state.mass
-    engine.inv_inertia = 1.0 / engine.state.inertia
-
-
-def restore_state(engine, arrays: dict[str, np.ndarray]) -> None:
-    """Copy a checkpoint's ``state/…`` arrays into ``engine.state`` (checkpoints from before ``ids`` existed:
-    particles numbered as created) and derive 1/m and 1/I anew: the restored particles may be numbered
-    otherwise than at construction (renumbered in cell order)."""
-    state = engine.state
-    for k, a in state.arrays().items():
-        key = f"state/{k}"
-        if key in arrays:
-            a[...] = arrays[key]
-        elif k == "ids":
-            a[...] = np.arange(a.shape[0])
-        else:
-            raise KeyError(key)
-    _derive_inverses(engine)
-
-
-class SoftSphereEngine:
+class SoftSphereEngine(ParticleEngine):
     """Velocity-Verlet soft-sphere DEM with cell + Verlet lists (Sun 2007 eqs 15–26)."""
 
     def __init__(self, case, state: ParticleState | None = None):
-        self.case = case
-        self.dim2 = case.particles.dimensions == 2
-        self.walls = build_walls(case)
-        st = set_up_particles(self, case, state)
+        super().__init__(case, state)
+        st = self.state
         # linear drag coefficient c [kg/s] per particle: the external force is ext_force − c v, with v the
         # velocity where the force is evaluated (each sub-step); zero unless a coupling sets it
         self.ext_damping = np.zeros(st.n)
         self.pp, self.pw, self.contact_times = self._contact_tables()
-        self.wall_point0, self.wall_normal, self.wall_motion = self.walls.arrays()
         self.wall_hist = np.zeros((st.n, len(self.walls.planes), 3))
         dmax = 2.0 * st.radius.max() if st.n else 0.0
         self.skin = case.neighbours.skin if case.neighbours.skin is not None else 0.25 * dmax
@@ -99,27 +57,6 @@ class SoftSphereEngine:
         self._compute_forces(update=False)
 
     # ------------------------------------------------------------ set-up
-    def law_for_pair(self, a: int, b: int):
-        p = self.case.particles
-        law = p.contact
-        names = (p.species[a].name, p.species[b].name)
-        for pc in p.pairs:
-            if sorted(pc.species) == sorted(names):
-                law = type(law).model_validate({**law.model_dump(), **pc.changes()})
-        return law
-
-    def law_for_wall(self, plane, species: int):
-        """Particle–wall law: wall_contact (or contact), then the wall's overrides, then wall_pairs."""
-        p = self.case.particles
-        law = p.wall_contact if p.wall_contact is not None else p.contact
-        changes = dict(plane.source.contact.changes()) if plane.source.contact is not None else {}
-        for wp in p.wall_pairs:
-            if wp.species == p.species[species].name and wp.wall in (None, plane.source.name):
-                changes.update(wp.changes())
-        if changes:
-            law = type(law).model_validate({**law.model_dump(), **changes})
-        return law
-
     def _contact_tables(self):
         sp = self.case.particles.species
         ns, nw = len(sp), len(self.walls.planes)
@@ -197,29 +134,10 @@ class SoftSphereEngine:
             )
         return t.dt
 
-    def check_initial_overlaps(self, tolerance: float = 1e-9) -> None:
-        """Raise CaseError if two particles, or a particle and a wall, overlap at the start."""
+    def _touching_pairs(self) -> tuple[np.ndarray, np.ndarray]:
         st = self.state
         rs, partner, _, _ = build_pairs(st.position, st.radius, 0.0, self.dim2)
-        if partner.size:
-            i = np.repeat(np.arange(st.n), np.diff(rs))
-            d = np.linalg.norm(st.position[i] - st.position[partner], axis=1)
-            ov = st.radius[i] + st.radius[partner] - d
-            bad = np.flatnonzero(ov > tolerance * (st.radius[i] + st.radius[partner]))
-            if bad.size:
-                k = bad[np.argmax(ov[bad])]
-                raise CaseError(
-                    f"particles.placement: initial particles overlap: {bad.size} pair(s), e.g. particles {i[k]} and {partner[k]} by "
-                    f"{ov[k]:.3g} m; particles must start apart"
-                )
-        for w, plane in enumerate(self.walls.planes):
-            gap = (st.position - plane.point) @ plane.normal - st.radius
-            bad = np.flatnonzero(gap < -tolerance * st.radius)
-            if bad.size:
-                raise CaseError(
-                    f"particles.placement: initial particles cross wall {plane.name}: {bad.size} particle(s), e.g. particle {bad[0]} "
-                    f"by {-gap[bad[0]]:.3g} m"
-                )
+        return np.repeat(np.arange(st.n), np.diff(rs)), partner
 
     # ------------------------------------------------------------ stepping
     def _compute_forces(self, update: bool):
@@ -273,7 +191,7 @@ class SoftSphereEngine:
                 "reorders": self.reorders}
 
     def restore(self, arrays: dict[str, np.ndarray], scalars: dict) -> None:
-        restore_state(self, arrays)
+        self.restore_state(arrays)
         self.last_reorder = int(scalars.get("last_reorder", 0))
         self.reorders = int(scalars.get("reorders", 0))
         for k in ("wall_hist", "ref_pos", "ext_force"):

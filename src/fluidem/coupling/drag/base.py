@@ -32,7 +32,11 @@ drag_laws: Registry[type["DragLaw"]] = Registry("drag law")
 
 
 class DragLaw(BaseModel):
-    """A drag closure chosen by name; subclasses set ``code`` (see ``_dispatch.py``)."""
+    """A drag closure chosen by name (its ``model`` key); subclasses set ``code`` (see ``_dispatch.py``).
+
+    A law's parameters are its other fields, numbers all; ``pack`` lays them out after the code in the
+    order they are declared, and the law's ``beta_per_solids(p, ...)`` kernel reads them from ``p[1:]``.
+    """
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
@@ -44,6 +48,8 @@ class DragLaw(BaseModel):
     # True: the particle force is the total gas force (pressure part included, Hoomans 1996 eq. 34-35),
     # to be used without −V_p ∇p and with the "cell_beta" exchange (coupling/schema.py checks it)
     total_force: ClassVar[bool] = False
+    # the test that checks this law against its published formula or data (a function name under tests/)
+    reference_test: ClassVar[str] = ""
 
     @classmethod
     def cell_code(cls) -> int:
@@ -57,6 +63,11 @@ class DragLaw(BaseModel):
             return self
         return next(drag_laws.get(n)() for n in drag_laws.names() if drag_laws.get(n).code == code)
 
+    def pack(self) -> np.ndarray:
+        """The float64 row the kernels read: [code, parameters in declaration order]."""
+        params = [getattr(self, f) for f in type(self).model_fields if f != "model"]
+        return np.array([float(self.code), *(float(v) for v in params)])
+
     def beta(self, voidage, slip_speed, diameter, gas_density, gas_viscosity, y_ratio=1.0) -> np.ndarray:
         """β [kg m^-3 s^-1] per unit bed volume of the particle force; arguments broadcast against each other.
 
@@ -64,12 +75,12 @@ class DragLaw(BaseModel):
         gas_density ρ_g [kg/m^3], gas_viscosity μ_g [Pa s], y_ratio d_i/D̄ [-]
         (polydisperse index, used by ``beetstra`` only).
         """
-        return _evaluate(self.code, True, voidage, slip_speed, diameter, gas_density, gas_viscosity, y_ratio)
+        return _evaluate(self.pack(), True, voidage, slip_speed, diameter, gas_density, gas_viscosity, y_ratio)
 
     def beta_per_solids(self, voidage, slip_speed, diameter, gas_density, gas_viscosity,
                         y_ratio=1.0) -> np.ndarray:
         """β/(1 − ε) [kg m^-3 s^-1]: finite at ε = 1."""
-        return _evaluate(self.code, False, voidage, slip_speed, diameter, gas_density, gas_viscosity, y_ratio)
+        return _evaluate(self.pack(), False, voidage, slip_speed, diameter, gas_density, gas_viscosity, y_ratio)
 
     def force_coefficient(self, voidage, slip_speed, diameter, gas_density, gas_viscosity,
                           y_ratio=1.0) -> np.ndarray:
@@ -91,7 +102,7 @@ class DragLaw(BaseModel):
         return np.asarray(c)[..., None] * w
 
 
-def _evaluate(code, per_bed, voidage, slip_speed, diameter, gas_density, gas_viscosity, y_ratio):
+def _evaluate(law, per_bed, voidage, slip_speed, diameter, gas_density, gas_viscosity, y_ratio):
     from . import _dispatch
 
     args = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in
@@ -105,5 +116,5 @@ def _evaluate(code, per_bed, voidage, slip_speed, diameter, gas_density, gas_vis
             or np.any(flat[5] <= 0.0):
         raise ValueError("slip_speed must be >= 0 and diameter, gas_density, gas_viscosity, y_ratio > 0")
     out = np.empty(eps.size)
-    _dispatch.beta_array(code, per_bed, *flat, out)
+    _dispatch.beta_array(law, per_bed, *flat, out)
     return out.reshape(shape) if shape else float(out[0])

@@ -43,7 +43,7 @@ def normalised_drag(eps, re):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def beta_per_solids(eps, slip, d, rho, mu, y):
+def beta_per_solids(p, eps, slip, d, rho, mu, y):
     """β_i/(1−ε) [kg m^-3 s^-1] for a particle of diameter d = y D̄ (DEM book 2012 eq. 12)."""
     dm = d / y  # D̄, eq. 11
     re = eps * rho * slip * dm / mu
@@ -56,3 +56,4 @@ class Beetstra(DragLaw):
 
     model: Literal["beetstra"] = "beetstra"
     code: ClassVar[int] = CODE
+    reference_test: ClassVar[str] = "test_closure_matches_published_formula"

@@ -27,7 +27,7 @@ CODE = 3
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def beta_per_solids(eps, slip, d, rho, mu, y):
+def beta_per_solids(p, eps, slip, d, rho, mu, y):
     """β/(1−ε) [kg m^-3 s^-1] of Di Felice 1994 (y unused)."""
     re = eps * rho * slip * d / mu
     # C_D |u−v| = (0.63 √|u−v| + 4.8 √(μ/(ερd)))², finite at zero slip
@@ -46,4 +46,5 @@ class DiFelice(DragLaw):
 
     model: Literal["di_felice"] = "di_felice"
     code: ClassVar[int] = CODE
+    reference_test: ClassVar[str] = "test_closure_matches_published_formula"
     stokes_limit: ClassVar[bool] = False

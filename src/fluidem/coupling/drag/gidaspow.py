@@ -24,7 +24,7 @@ SWITCH = 0.8  # Sun 2007 eq. 30: Ergun at and below, Wen–Yu above
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def beta_per_solids(eps, slip, d, rho, mu, y):
+def beta_per_solids(p, eps, slip, d, rho, mu, y):
     """β/(1−ε) [kg m^-3 s^-1], Sun 2007 eqs 30-31 (y unused)."""
     if eps <= SWITCH:
         return ergun_per_solids(eps, slip, d, rho, mu)  # Sun 2007 eq. 30, first line
@@ -37,3 +37,4 @@ class Gidaspow(DragLaw):
 
     model: Literal["gidaspow"] = "gidaspow"
     code: ClassVar[int] = CODE
+    reference_test: ClassVar[str] = "test_closure_matches_published_formula"

@@ -24,7 +24,7 @@ SWITCH = 0.8  # Hoomans 1996 §3.2.2: Ergun below, Wen–Yu at and above
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def beta_per_solids(eps, slip, d, rho, mu, y):
+def beta_per_solids(p, eps, slip, d, rho, mu, y):
     """β/(1−ε) [kg m^-3 s^-1], Hoomans 1996 eqs 45-47 (y unused)."""
     if eps < SWITCH:
         return ergun_per_solids(eps, slip, d, rho, mu)  # Hoomans 1996 eq. 45
@@ -37,3 +37,4 @@ class Hoomans1996(DragLaw):
 
     model: Literal["hoomans1996"] = "hoomans1996"
     code: ClassVar[int] = CODE
+    reference_test: ClassVar[str] = "test_closure_matches_published_formula"

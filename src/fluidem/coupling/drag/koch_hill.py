@@ -25,7 +25,7 @@ CODE = 5
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def beta_per_solids(eps, slip, d, rho, mu, y):
+def beta_per_solids(p, eps, slip, d, rho, mu, y):
     """β/(1−ε) [kg m^-3 s^-1] of Koch & Hill 2001 (y unused)."""
     phi = 1.0 - eps
     if phi <= 0.0:
@@ -46,3 +46,4 @@ class KochHill(DragLaw):
 
     model: Literal["koch_hill"] = "koch_hill"
     code: ClassVar[int] = CODE
+    reference_test: ClassVar[str] = "test_closure_matches_published_formula"

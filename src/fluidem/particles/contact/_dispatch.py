@@ -1,9 +1,13 @@
 """Compiled dispatch over contact models and the shared tangential-history update.
 
+``coefficients`` is written from the ``contact_models`` registry (``registry.compiled_switch``): for the
+model code in slot 0 of a packed row it calls the ``coefficients`` kernel of the module that registered
+that model. A force-based model's module defines ``CODE`` (a unique integer) and
+``coefficients(p, overlap, m_eff, r_eff)``; nothing here names a model.
+
 ``contact_force`` is the one place where a contact's force is assembled from a
 model's coefficients: normal spring + dashpot (Sun 2007 eq. 21), tangential
 spring + dashpot with history (eqs 19–20, 22) truncated at the Coulomb limit.
-Adding a model adds one branch to ``coefficients``.
 
 ``contact_force`` is written without data-dependent branches: the rescaling of the
 rotated spring, the Coulomb truncation and the spring reset on slip are computed for
@@ -14,23 +18,36 @@ contacts (``_pair_kernels``), where LLVM turns each select into a blend across f
 contacts.
 """
 import math
+import sys
 
 from numba import njit
 
-from . import hertz_mindlin, spring_dashpot
+from ...registry import compiled_switch
+from .base import contact_models
 
 TINY = 1e-300  # guards a division whose result a select then drops (no inf or NaN is formed)
 
 
-@njit(cache=True, error_model="numpy", inline="always")
-def coefficients(p, overlap, m_eff, r_eff):
-    """(elastic normal force [N], η_n [N s/m], k_t [N/m], η_t [N s/m]) of the model coded in p[0]."""
-    code = int(p[0])
-    if code == spring_dashpot.CODE:
-        return spring_dashpot.coefficients(p, overlap, m_eff, r_eff)
-    if code == hertz_mindlin.CODE:
-        return hertz_mindlin.coefficients(p, overlap, m_eff, r_eff)
-    return 0.0, 0.0, 0.0, 0.0
+def _force_laws() -> dict:
+    """{CODE: coefficients kernel} of every registered force-based contact model."""
+    laws = {}
+    for name in contact_models.names():
+        cls = contact_models.get(name)
+        if cls.instantaneous:
+            continue
+        module = sys.modules[cls.__module__]
+        kernel = getattr(module, "coefficients", None)
+        if kernel is None:
+            raise TypeError(f"contact model {name!r}: its module {cls.__module__} defines no coefficients() kernel")
+        if cls.code in laws:
+            raise ValueError(f"contact model {name!r}: code {cls.code} is taken by another model")
+        laws[cls.code] = kernel
+    return laws
+
+
+# (elastic normal force [N], η_n [N s/m], k_t [N/m], η_t [N s/m]) of the model coded in p[0]
+coefficients = compiled_switch("coefficients", _force_laws(), ("p", "overlap", "m_eff", "r_eff"), "int(p[0])",
+                               "0.0, 0.0, 0.0, 0.0", __name__, __file__, error_model="numpy", inline="always")
 
 
 @njit(cache=True, error_model="numpy", inline="always")

@@ -43,19 +43,24 @@ turns each such failure into a clear error instead of a hang. Three things help:
 width that is not a whole number of diameters, a size distribution, or a smaller DT.
 
 Packed row: slot 0 CODE (3), slot 1 restitution e, slot 2 collapse time t_c [s],
-slot 7 friction μ.
+slot 7 friction μ. ``impulse`` is the collision law itself (eqs 10–29), which the event-driven
+engine's kernels (``particles/_hardsphere_kernels.py``) apply to each collision.
 """
 from __future__ import annotations
 
+import math
 from typing import ClassVar, Literal
 
 import numpy as np
+from numba import njit
 from pydantic import Field
 
 from .base import ContactModel, contact_models, empty_row
 
 CODE = 3
 SLOT_RESTITUTION, SLOT_COLLAPSE_TIME = 1, 2
+# collision classes
+NO_COLLISION, SLIDING, STICKING = 0, 1, 2
 
 
 @contact_models.register("hard_sphere")
@@ -76,6 +81,7 @@ class HardSphere(ContactModel):
 
     code: ClassVar[int] = CODE
     instantaneous: ClassVar[bool] = True
+    reference_test: ClassVar[str] = "test_2d_pair_collision_follows_hoomans_eqs"  # Hoomans 1996 eqs 10-29
 
     def pack(self, body_i, body_j) -> np.ndarray:
         row = empty_row(CODE, self.friction)
@@ -86,3 +92,45 @@ class HardSphere(ContactModel):
     def contact_time(self, m_eff, r_eff, impact_velocity, body_i=None, body_j=None) -> float:
         """Collisions are instantaneous: no contact time limits the step."""
         return 0.0
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def impulse(nx, ny, nz, ux, uy, uz, inv_ma, inv_mb, ka, kb, e, mu):
+    """Impulse on body a of a binary collision (Hoomans 1996 eqs 10–29, slip as a vector).
+
+    n : unit normal from b to a; u : velocity of a's contact point relative to b's
+    (u·n < 0 approaching); inv_m : 1/m [1/kg] (0 for a wall); k = R²/I [1/kg] (0 for a wall).
+
+    Returns (P_n, P_t (3), E_n, E_t, kind): normal impulse magnitude along n [N s],
+    tangential impulse on a [N s], energy dissipated by each part [J], and the class:
+    SLIDING (eq. 24), STICKING (eq. 25) or NO_COLLISION when u·n >= 0.
+    """
+    c0 = ux * nx + uy * ny + uz * nz  # compression velocity C_0, eq. 14 (spin adds nothing along n)
+    if c0 >= 0.0:  # not approaching (round-off after the prediction): no impulse
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, NO_COLLISION
+    sx = ux - c0 * nx  # initial slip S_0, eq. 11 as a vector in the tangent plane
+    sy = uy - c0 * ny
+    sz = uz - c0 * nz
+    b2 = inv_ma + inv_mb  # eq. 15
+    b1 = b2 + ka + kb  # eq. 12
+    pn = -(1.0 + e) * c0 / b2  # eq. 22
+    en = c0 * c0 / (2.0 * b2) * (1.0 - e * e)  # eq. 23
+    s = math.sqrt(sx * sx + sy * sy + sz * sz)
+    if s >= mu * b1 * pn:  # sliding, eq. 24
+        if s > 0.0:
+            f = -mu * pn / s  # eq. 26: P_t = −μ P_n ŝ
+            ptx = f * sx
+            pty = f * sy
+            ptz = f * sz
+        else:
+            ptx = 0.0
+            pty = 0.0
+            ptz = 0.0
+        et = -mu * (1.0 + e) * c0 / b2 * (s + mu * b1 * (1.0 + e) * c0 / (2.0 * b2))  # eq. 27
+        return pn, ptx, pty, ptz, en, et, SLIDING
+    # sticking, eq. 25: the slip ends at zero
+    ptx = -sx / b1  # eq. 28
+    pty = -sy / b1
+    ptz = -sz / b1
+    et = s * s / (2.0 * b1)  # eq. 29
+    return pn, ptx, pty, ptz, en, et, STICKING

@@ -89,6 +89,7 @@ class HertzMindlin(ContactModel):
     poisson_ratio: float = Field(0.3, gt=-1.0, lt=0.5, description="Poisson ratio nu [-] of bodies that give none")
 
     code: ClassVar[int] = CODE
+    reference_test: ClassVar[str] = "test_particle_particle_collision"  # restitution, Hertz impact time
 
     def _moduli(self, body_i, body_j):
         def mat(b):

@@ -46,6 +46,7 @@ class LinearSpringDashpot(ContactModel):
     restitution: float = Field(0.9, gt=0.0, le=1.0, description="normal restitution e_n [-] (ignored if damping given)")
 
     code: ClassVar[int] = CODE
+    reference_test: ClassVar[str] = "test_particle_particle_collision"  # Sun 2007 eqs 25-26
 
     def pack(self, body_i, body_j) -> np.ndarray:
         row = empty_row(CODE, self.friction)
@@ -67,13 +68,6 @@ class LinearSpringDashpot(ContactModel):
         if disc <= 0:
             return math.inf  # overdamped: no rebound; the caller reports it
         return math.pi / math.sqrt(disc)
-
-    def restitution_for(self, m_eff) -> float:
-        """Effective e_n for a pair of effective mass m_eff (eq. 25) when damping is given directly."""
-        row = self.pack(None, None)
-        eta = row[4] + 2.0 * row[3] * math.sqrt(self.stiffness * m_eff)
-        tc = self.contact_time(m_eff, 0.0, 0.0)
-        return math.exp(-eta / m_eff * tc / 2.0) if math.isfinite(tc) else 0.0
 
 
 @njit(cache=True, error_model="numpy", inline="always")

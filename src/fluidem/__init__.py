@@ -6,28 +6,90 @@ Public surface::
     case = fd.load_case("pour", {"particles.contact.restitution": 1.0})
     sim = fd.Simulation(case, out_dir="runs/pour")
     sim.run(until=0.5)
+
+A case can also be built in Python from the objects the TOML loader builds::
+
+    case = fd.Case(
+        name="pour",
+        particles=fd.Particles(
+            dimensions=2,
+            species=[fd.Species(name="aluminium", diameter=4e-3, density=2700.0, count=500)],
+            contact=fd.contact.LinearSpringDashpot(stiffness=800.0, restitution=0.9, friction=0.3),
+            placement=fd.Placement(method="random", seed=1996)),
+        walls=[fd.Wall(name="container", kind="box", lower=(0.0, 0.0, 0.0), upper=(0.096, 0.192, 0.004))],
+        time=fd.Time(end=1.5),
+        output=fd.Output(snapshot_interval=0.02, probe_interval=0.005))
+
+``fd.contact`` holds the contact laws (``fd.contact.HertzMindlin``, ...), ``fd.drag`` the drag
+closures (``fd.drag.Beetstra``, ...), ``fd.gas`` the gas solver and its boundary conditions.
+
+The package reports through the ``logging`` logger ``"fluidem"`` and its children (``fluidem.progress``:
+the progress lines of a run); it adds only a ``NullHandler``, so nothing is shown until the
+application configures logging (the ``fluidem`` command does).
 """
+import logging as _logging
+
 from ._numba_cache import install as _install_cache_stamp
+
+_logging.getLogger("fluidem").addHandler(_logging.NullHandler())
 
 _install_cache_stamp()  # before any kernel module is imported: their cache locators are chosen at decoration
 
 from ._threads import launch_pool, prefer_openmp  # noqa: E402
-from .case import Case, load_case  # noqa: E402
+from .case import (  # noqa: E402
+    Case,
+    Motion,
+    Neighbours,
+    Output,
+    PairContact,
+    Particles,
+    Placement,
+    SizeDistribution,
+    Species,
+    Time,
+    Wall,
+    WallContact,
+    WallPairContact,
+    load_case,
+)
+from .coupling import drag  # noqa: E402
 from .errors import CaseError  # noqa: E402
+from .particles import contact  # noqa: E402
+from . import gas  # noqa: E402
 from .schedule import Every, EveryTime  # noqa: E402
 
-__version__ = "0.1.0"
+
+def _distribution_version() -> str:
+    """The installed distribution's version (pyproject.toml's ``version``); ``0+unknown`` when the
+    package runs from a source tree that was never installed."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("fluidem")
+    except PackageNotFoundError:
+        return "0+unknown"
+
+
+__version__ = _distribution_version()
 
 prefer_openmp()
 launch_pool()  # after prefer_openmp: the launch fixes the threading layer
 
 
 def __getattr__(name):
-    if name == "Simulation":
+    if name == "Simulation":  # lazily: the engines and writers are not needed to read or build a case
         from .simulation import Simulation
 
         return Simulation
-    raise AttributeError(name)
+    raise AttributeError(f"module 'fluidem' has no attribute {name!r}")
 
 
-__all__ = ["Case", "load_case", "CaseError", "Every", "EveryTime", "Simulation", "__version__"]
+def __dir__():
+    return sorted(set(globals()) | {"Simulation"})
+
+
+__all__ = [
+    "Case", "Particles", "Species", "Wall", "Time", "Output", "Placement", "Neighbours", "Motion",
+    "SizeDistribution", "PairContact", "WallPairContact", "WallContact",
+    "contact", "drag", "gas", "load_case", "CaseError", "Every", "EveryTime", "Simulation", "__version__",
+]

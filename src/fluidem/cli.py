@@ -1,17 +1,26 @@
-"""The ``fluidem`` command: run, cases, bench.
+"""The ``fluidem`` command: run, cases, bench (and plot, animate, compare, report from ``cli_plot``).
 
 Bad input exits with status 2 and a message naming the key and value; nothing is
 written. Ctrl-C stops a run at the next chunk with a checkpoint (exit 130); resume
 with ``fluidem run --resume DIR``.
+
+A command's result goes to stdout (the summary JSON of ``run``, the list of ``cases``, the
+table of ``bench``); diagnostics go through the ``fluidem`` logger to stderr (``_log``): the
+start line and progress lines of a run at INFO, warnings as ``WARNING: ...``, errors as
+``fluidem: error: ...``. ``--quiet`` (before or after the subcommand) keeps warnings and
+errors only, ``--verbose`` adds DEBUG records.
 """
 from __future__ import annotations
 
 import argparse
+import logging
 import sys
 import time
 from pathlib import Path
 
 EXIT_BAD_INPUT = 2
+
+log = logging.getLogger(__name__)
 
 
 def _parse_sets(items: list[str]) -> dict:
@@ -52,22 +61,20 @@ def cmd_run(args) -> int:
         out = Path(args.out) if args.out else Path("runs") / f"{case.name}-{time.strftime('%Y%m%d-%H%M%S')}"
         sim = Simulation(case, out_dir=out, progress=not args.quiet)
     until = args.until if args.until is not None else sim.case.time.end
-    if not args.quiet:
-        print(f"fluidem: {sim.case.name}: {sim.engine.state.n} particles, dt = {sim.dt:.3g} s, "
-              f"to t = {until:g} s, {sim.threads} thread(s) -> {out}",
-              file=sys.stderr)
+    log.info("fluidem: %s: %d particles, dt = %.3g s, to t = %g s, %d thread(s) -> %s",
+             sim.case.name, sim.engine.state.n, sim.dt, until, sim.threads, out)
     try:
         summary = sim.run(until=until)
     except KeyboardInterrupt:
-        print(f"fluidem: interrupted at t = {sim.time:.6g} s; checkpoint written. "
-              f"Continue with: fluidem run --resume {out}", file=sys.stderr)
+        log.warning("interrupted at t = %.6g s; checkpoint written. Continue with: fluidem run --resume %s",
+                    sim.time, out)
         return 130
     except FloatingPointError as err:
-        print(f"fluidem: run failed: {err}", file=sys.stderr)
+        log.error("run failed: %s", err)
         return 1
     except OSError as err:
-        print(f"fluidem: run stopped at t = {sim.time:.6g} s: {err}. The last checkpoint in {out} is intact; "
-              f"free the space or fix the folder, then: fluidem run --resume {out}", file=sys.stderr)
+        log.error("run stopped at t = %.6g s: %s. The last checkpoint in %s is intact; "
+                  "free the space or fix the folder, then: fluidem run --resume %s", sim.time, err, out, out)
         return 1
     print(summary_json(summary), end="")
     return 0
@@ -95,9 +102,25 @@ def cmd_bench(args) -> int:
     return 0
 
 
+def _add_verbosity(parser: argparse.ArgumentParser, defaults: bool) -> None:
+    """``-q/--quiet`` and ``-v/--verbose`` on ``parser``. The main parser holds the defaults (False);
+    each subcommand's copies default to nothing (``SUPPRESS``), so that a flag given before the
+    subcommand is not reset by the subcommand's parser, and one given after it still counts."""
+    default = False if defaults else argparse.SUPPRESS
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument("-q", "--quiet", action="store_true", default=default,
+                       help="warnings and errors only: no start line, progress lines or notes")
+    group.add_argument("-v", "--verbose", action="store_true", default=default,
+                       help="debug messages too")
+
+
 def build_parser() -> argparse.ArgumentParser:
+    from . import __version__
+
     p = argparse.ArgumentParser(prog="fluidem", description="Discrete-particle simulation of gas–solid flows.")
-    p.add_argument("--version", action="store_true", help="print the version and exit")
+    p.add_argument("--version", action="version", version=f"%(prog)s {__version__}",
+                   help="print the version and exit")
+    _add_verbosity(p, defaults=True)
     sub = p.add_subparsers(dest="command")
 
     r = sub.add_parser("run", help="run a case (built-in name or TOML path)",
@@ -110,7 +133,6 @@ def build_parser() -> argparse.ArgumentParser:
                    help="override a case key by dotted name, e.g. --set particles.contact.restitution=1.0")
     r.add_argument("--threads", type=int, help="compute threads (default: one per 1200 particles, at most all cores)")
     r.add_argument("--resume", metavar="DIR", help="continue a stopped run from DIR/restart.h5")
-    r.add_argument("--quiet", action="store_true", help="no progress lines")
     r.set_defaults(func=cmd_run)
 
     c = sub.add_parser("cases", help="list built-in cases")
@@ -133,27 +155,46 @@ def build_parser() -> argparse.ArgumentParser:
     from .cli_plot import add_commands
 
     add_commands(sub)
+    for command in sub.choices.values():
+        _add_verbosity(command, defaults=False)
     return p
 
 
+def _versions() -> str:
+    import platform
+
+    import numba
+    import numpy
+
+    from . import __version__
+
+    return f"fluidem {__version__}, Python {platform.python_version()}, NumPy {numpy.__version__}, Numba {numba.__version__}"
+
+
 def main(argv: list[str] | None = None) -> int:
+    """Run the ``fluidem`` command with ``argv`` (default ``sys.argv[1:]``); the exit status.
+
+    Log records of the ``fluidem`` logger are shown on stderr while the command runs, at the
+    level the flags choose (``_log.level_for``); usage errors and ``--version`` exit through
+    argparse (``SystemExit``)."""
+    from ._log import command_logging, level_for
     from .errors import CaseError
 
     parser = build_parser()
     args = parser.parse_args(argv)
-    if args.version:
-        from . import __version__
-
-        print(__version__)
-        return 0
+    if args.quiet and args.verbose:
+        parser.error("--quiet and --verbose exclude each other")
     if not getattr(args, "func", None):
         parser.print_help()
         return EXIT_BAD_INPUT
-    try:
-        return args.func(args)
-    except CaseError as err:
-        print(f"fluidem: error: {err}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+    with command_logging(level_for(args.quiet, args.verbose)):
+        if log.isEnabledFor(logging.DEBUG):
+            log.debug("%s; command: %s", _versions(), " ".join(sys.argv[1:] if argv is None else map(str, argv)))
+        try:
+            return args.func(args)
+        except CaseError as err:
+            log.error("%s", err)
+            return EXIT_BAD_INPUT
 
 
 if __name__ == "__main__":

@@ -4,29 +4,50 @@
 exit status and raises ``CaseError`` for bad input (not a run directory, an unknown
 colour mode, a time outside the run, …), which the main CLI turns into status 2 with
 the message. A figure the run cannot have (no probes.csv, no snapshots, no gas) is
-skipped with a one-line note on stderr; the command still succeeds.
+skipped with a one-line note, an INFO record of the ``fluidem.cli_plot`` logger that the
+command shows on stderr (hidden by ``--quiet``); the command still succeeds. The files
+written are the command's output, on stdout.
 """
 from __future__ import annotations
 
-import sys
+import functools
+import logging
 from pathlib import Path
 
+from ._log import command_logging
 from .errors import CaseError
 
 COLOR_CHOICES = ("height", "speed", "species", "nc")
+
+log = logging.getLogger(__name__)
+
+
+def _shows_notes(command):
+    """Run ``command(args)`` with the ``fluidem`` logger shown on stderr, at INFO unless an enclosing
+    ``fluidem.cli.main`` already chose the level: a handler called from a parser of its own still
+    prints its notes."""
+
+    @functools.wraps(command)
+    def run(args) -> int:
+        with command_logging():
+            return command(args)
+
+    return run
 
 
 def _require_matplotlib(command: str) -> None:
     try:
         import matplotlib  # noqa: F401
     except ImportError:
-        raise CaseError(f"fluidem {command} needs matplotlib: pip install 'fluidem[plot]'") from None
+        raise CaseError(f"fluidem {command} needs matplotlib, a dependency of fluidem that is missing here: "
+                        "pip install 'matplotlib>=3.7'") from None
 
 
 def _note(command: str, name: str, why: str) -> None:
-    print(f"fluidem {command}: skipped {name}: {why}", file=sys.stderr)
+    log.info("fluidem %s: skipped %s: %s", command, name, why)
 
 
+@_shows_notes
 def cmd_plot(args) -> int:
     _require_matplotlib("plot")
     from .plotting.figures import PlotOptions, parse_names, parse_times, parse_window, plot_run
@@ -47,6 +68,7 @@ def cmd_plot(args) -> int:
     return 0
 
 
+@_shows_notes
 def cmd_animate(args) -> int:
     _require_matplotlib("animate")
     from .plotting.animate import animate_run
@@ -59,6 +81,7 @@ def cmd_animate(args) -> int:
     return 0
 
 
+@_shows_notes
 def cmd_compare(args) -> int:
     _require_matplotlib("compare")
     from .plotting.compare import compare_runs, parse_quantities
@@ -69,13 +92,14 @@ def cmd_compare(args) -> int:
     formats = parse_formats(args.format)
     result = compare_runs(runs, Path(args.out), parse_quantities(args.quantity), formats)
     for note in result.notes:
-        print(f"fluidem compare: {note}", file=sys.stderr)
+        log.info("fluidem compare: %s", note)
     print(result.table)
-    for path in result.written:
-        print(path, file=sys.stderr)
+    for path in result.written:  # the files written go to stderr: stdout holds the table alone
+        log.info("%s", path)
     return 0
 
 
+@_shows_notes
 def cmd_report(args) -> int:
     _require_matplotlib("report")
     from .plotting.figures import PlotOptions

@@ -21,7 +21,10 @@ A case can also be built in Python from the objects the TOML loader builds::
         output=fd.Output(snapshot_interval=0.02, probe_interval=0.005))
 
 ``fd.contact`` holds the contact laws (``fd.contact.HertzMindlin``, ...), ``fd.drag`` the drag
-closures (``fd.drag.Beetstra``, ...), ``fd.gas`` the gas solver and its boundary conditions.
+closures (``fd.drag.Beetstra``, ...), ``fd.gas`` the gas solver and its boundary conditions
+(``fd.gas.Inflow``, ...). A coupled case adds ``gas=fd.Gas(grid=fd.gas.Grid(cells=..., size=...,
+depth=...), boundaries={"left": fd.gas.Wall(), ...}, dt=...)`` and ``coupling=fd.Coupling(
+drag=fd.drag.Gidaspow(), voidage=fd.VoidageMapping(method="centroid"))``.
 
 The package reports through the ``logging`` logger ``"fluidem"`` and its children (``fluidem.progress``:
 the progress lines of a run); it adds only a ``NullHandler``, so nothing is shown until the
@@ -53,9 +56,12 @@ from .case import (  # noqa: E402
     load_case,
 )
 from .coupling import drag  # noqa: E402
+from .coupling.schema import CouplingSection as Coupling  # noqa: E402
+from .coupling.voidage import VoidageMapping  # noqa: E402
 from .errors import CaseError  # noqa: E402
 from .particles import contact  # noqa: E402
 from . import gas  # noqa: E402
+from .gas.schema import GasSection as Gas  # noqa: E402
 from .schedule import Every, EveryTime  # noqa: E402
 
 
@@ -91,5 +97,5 @@ def __dir__():
 __all__ = [
     "Case", "Particles", "Species", "Wall", "Time", "Output", "Placement", "Neighbours", "Motion",
     "SizeDistribution", "PairContact", "WallPairContact", "WallContact",
-    "contact", "drag", "gas", "load_case", "CaseError", "Every", "EveryTime", "Simulation", "__version__",
+    "Gas", "Coupling", "VoidageMapping", "contact", "drag", "gas", "load_case", "CaseError", "Every", "EveryTime", "Simulation", "__version__",
 ]

@@ -35,7 +35,7 @@ ContactLaw = Annotated[Union[tuple(contact_models.get(n) for n in contact_models
 class SizeDistribution(Strict):
     """Diameter distribution of a species; diameters are drawn once at set-up with the placement seed."""
 
-    kind: Literal["uniform", "normal", "lognormal"]
+    kind: Literal["uniform", "normal", "lognormal"] = Field(description="shape of the distribution")
     min: float | None = Field(None, gt=0.0, description="smallest diameter [m] (uniform: required)")
     max: float | None = Field(None, gt=0.0, description="largest diameter [m] (uniform: required)")
     std: float | None = Field(None, gt=0.0, description="standard deviation [m] (normal) or of ln d (lognormal)")
@@ -54,46 +54,47 @@ class SizeDistribution(Strict):
 class Species(Strict):
     """One kind of particle."""
 
-    name: str = "particles"
+    name: str = Field("particles", description="species name (pairs, wall_pairs and the output refer to it)")
     diameter: float = Field(gt=0.0, description="diameter [m] (the mean if a size_distribution is given)")
     density: float = Field(gt=0.0, description="material density [kg/m^3]")
     count: int = Field(ge=0, description="number of particles")
-    size_distribution: SizeDistribution | None = None
+    size_distribution: SizeDistribution | None = Field(None, description="diameters drawn from a distribution; "
+                                                                         "default all equal to diameter")
     youngs_modulus: float | None = Field(None, gt=0.0, description="E [Pa] for Hertz–Mindlin (default: the contact's)")
     poisson_ratio: float | None = Field(None, gt=-1.0, lt=0.5, description="nu [-] for Hertz–Mindlin")
 
 
-class PairContact(Strict):
+class ContactOverride(Strict):
+    """Contact parameters that replace those of the contact law where an override applies (None: kept)."""
+
+    restitution: float | None = Field(None, gt=0.0, le=1.0, description="normal restitution coefficient e_n [-]")
+    friction: float | None = Field(None, ge=0.0, description="Coulomb friction coefficient mu [-]")
+    stiffness: float | None = Field(None, gt=0.0, description="normal stiffness k_n [N/m] (linear_spring_dashpot)")
+    damping: float | None = Field(None, ge=0.0, description="normal damping eta_n [N s/m] (linear_spring_dashpot)")
+
+    def changes(self) -> dict:
+        """The parameters this override sets."""
+        return {k: getattr(self, k) for k in ContactOverride.model_fields if getattr(self, k) is not None}
+
+
+class PairContact(ContactOverride):
     """Override of contact parameters for one species pair (e.g. restitution between species a and b)."""
 
-    species: tuple[str, str]
-    restitution: float | None = Field(None, gt=0.0, le=1.0)
-    friction: float | None = Field(None, ge=0.0)
-    stiffness: float | None = Field(None, gt=0.0)
-    damping: float | None = Field(None, ge=0.0)
-
-    def changes(self) -> dict:
-        return {k: v for k, v in self.model_dump(exclude={"species"}).items() if v is not None}
+    species: tuple[str, str] = Field(description="the two species names (the same name twice: within a species)")
 
 
-class WallPairContact(Strict):
+class WallPairContact(ContactOverride):
     """Override of particle–wall contact parameters for one species (optionally one wall)."""
 
-    species: str
+    species: str = Field(description="species name")
     wall: str | None = Field(None, description="wall name (a box's planes share it); default every wall")
-    restitution: float | None = Field(None, gt=0.0, le=1.0)
-    friction: float | None = Field(None, ge=0.0)
-    stiffness: float | None = Field(None, gt=0.0)
-    damping: float | None = Field(None, ge=0.0)
-
-    def changes(self) -> dict:
-        return {k: v for k, v in self.model_dump(exclude={"species", "wall"}).items() if v is not None}
 
 
 class Placement(Strict):
     """Initial positions: random non-overlapping fill, perturbed lattice (Hoomans 1996 §4.1) or a file."""
 
-    method: Literal["random", "lattice", "file"] = "random"
+    method: Literal["random", "lattice", "file"] = Field(
+        "random", description="random non-overlapping fill, perturbed lattice (Hoomans 1996 §4.1) or a file")
     region_lower: Vec3 | None = Field(None, description="lower corner of the fill region [m]; default: the wall box")
     region_upper: Vec3 | None = Field(None, description="upper corner of the fill region [m]; default: the wall box")
     spacing: float = Field(1.05, ge=1.0, description="lattice pitch in largest diameters [-]")
@@ -112,7 +113,7 @@ class Placement(Strict):
 class Motion(Strict):
     """Prescribed wall motion: constant velocity or sinusoidal oscillation x = A sin(2π f t + φ)."""
 
-    kind: Literal["constant_velocity", "oscillation"]
+    kind: Literal["constant_velocity", "oscillation"] = Field(description="kind of motion")
     velocity: Vec3 | None = Field(None, description="[m/s] for constant_velocity")
     amplitude: Vec3 | None = Field(None, description="[m] displacement amplitude vector for oscillation")
     frequency: float | None = Field(None, gt=0.0, description="[Hz] for oscillation")
@@ -127,32 +128,24 @@ class Motion(Strict):
         return self
 
 
-class WallContact(Strict):
+class WallContact(ContactOverride):
     """Per-wall override of the particle–wall contact parameters."""
-
-    restitution: float | None = Field(None, gt=0.0, le=1.0)
-    friction: float | None = Field(None, ge=0.0)
-    stiffness: float | None = Field(None, gt=0.0)
-    damping: float | None = Field(None, ge=0.0)
-
-    def changes(self) -> dict:
-        return {k: v for k, v in self.model_dump().items() if v is not None}
 
 
 class Wall(Strict):
     """A plane (point + inward normal) or an axis-aligned box of planes facing inwards."""
 
-    name: str = "wall"
-    kind: Literal["plane", "box"]
+    name: str = Field("wall", description="wall name (wall_pairs and the output refer to it)")
+    kind: Literal["plane", "box"] = Field(description="an infinite plane or an axis-aligned box of six planes")
     point: Vec3 | None = Field(None, description="a point of the plane [m]")
     normal: Vec3 | None = Field(None, description="normal pointing into the particle region")
     lower: Vec3 | None = Field(None, description="box lower corner [m]")
     upper: Vec3 | None = Field(None, description="box upper corner [m]")
     open_top: bool = Field(False, description="box without its upper wall along gravity")
-    motion: Motion | None = None
-    contact: WallContact | None = None
+    motion: Motion | None = Field(None, description="prescribed motion; default at rest")
+    contact: WallContact | None = Field(None, description="this wall's overrides of the particle–wall contact")
     youngs_modulus: float | None = Field(None, gt=0.0, description="E [Pa] of the wall for Hertz–Mindlin")
-    poisson_ratio: float | None = Field(None, gt=-1.0, lt=0.5)
+    poisson_ratio: float | None = Field(None, gt=-1.0, lt=0.5, description="nu [-] of the wall for Hertz–Mindlin")
 
     @model_validator(mode="after")
     def _check(self):
@@ -171,13 +164,15 @@ class Wall(Strict):
 
 
 class Particles(Strict):
+    """The particles: species, contact laws and overrides, and how they are placed at t = 0."""
+
     dimensions: Literal[2, 3] = Field(3, description="2: centres move in the x-y plane, spin about z only")
-    species: list[Species] = Field(min_length=1)
-    contact: ContactLaw
+    species: list[Species] = Field(min_length=1, description="the kinds of particle")
+    contact: ContactLaw = Field(description="particle–particle contact law, chosen by its model key")
     pairs: list[PairContact] = Field(default_factory=list, description="per species-pair overrides")
     wall_contact: ContactLaw | None = Field(None, description="particle–wall law; default: the particle law")
     wall_pairs: list[WallPairContact] = Field(default_factory=list, description="per species(–wall) overrides")
-    placement: Placement = Field(default_factory=Placement)
+    placement: Placement = Field(default_factory=Placement, description="initial positions and velocities")
 
     @field_validator("species")
     @classmethod
@@ -203,6 +198,8 @@ class Particles(Strict):
 
 
 class Time(Strict):
+    """The clock: end time and the DEM time step."""
+
     end: float = Field(gt=0.0, description="simulated time to reach [s]")
     dt: float | None = Field(None, gt=0.0, description="DEM time step [s]; default dt_fraction × t_c")
     dt_fraction: float = Field(0.02, gt=0.0, le=0.1, description="dt / t_c when dt is not given (Sun 2007: 1/50)")
@@ -210,6 +207,8 @@ class Time(Strict):
 
 
 class Neighbours(Strict):
+    """Neighbour lists of the particle engines."""
+
     skin: float | None = Field(None, gt=0.0, description="Verlet skin [m]; default 0.25 × largest diameter")
     reorder_interval: int | None = Field(
         None, ge=0, description="soft spheres: renumber the particles in cell order at set-up and at the first list "
@@ -218,6 +217,8 @@ class Neighbours(Strict):
 
 
 class Output(Strict):
+    """How often the run writes snapshots, probes, checkpoints and progress lines."""
+
     snapshot_interval: float | None = Field(None, gt=0.0, description="[s] simulated; default end/100")
     probe_interval: float | None = Field(None, gt=0.0, description="[s] simulated; default end/1000")
     checkpoint_interval: float | None = Field(None, gt=0.0, description="[s] simulated; default end/10")
@@ -227,14 +228,14 @@ class Output(Strict):
 class Case(Strict):
     """A complete run description in SI units."""
 
-    name: str = "case"
-    description: str = ""
+    name: str = Field("case", description="case name (summary.json, reports)")
+    description: str = Field("", description="one line on what the case is (fluidem cases lists it)")
     gravity: Vec3 | None = Field(None, description="[m/s^2]; default −9.81 along y in 2D, along z in 3D")
     particles: Particles
-    walls: list[Wall] = Field(default_factory=list)
-    time: Time
-    neighbours: Neighbours = Field(default_factory=Neighbours)
-    output: Output = Field(default_factory=Output)
+    walls: list[Wall] = Field(default_factory=list, description="walls of the particles")
+    time: Time = Field(description="end time and time step")
+    neighbours: Neighbours = Field(default_factory=Neighbours, description="neighbour-list settings")
+    output: Output = Field(default_factory=Output, description="what is written and how often")
     threads: int | None = Field(None, ge=1, description="compute threads; default one per 1200 particles, at most all cores")
     gas: GasSection | None = Field(None, description="gas phase; omit for a DEM-only run")
     coupling: CouplingSection | None = Field(None, description="gas–particle exchange; default with [gas]")

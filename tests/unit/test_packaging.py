@@ -170,3 +170,23 @@ def test_the_docstring_example_builds_the_pour_case():
     exec(code, scope)  # noqa: S102 - the documented example itself
     loaded = fd.load_case("pour")
     assert scope["case"].model_dump(exclude={"description"}) == loaded.model_dump(exclude={"description"})
+
+
+def test_a_coupled_case_built_from_the_top_level_objects_equals_the_toml_one():
+    """tsuji-jet's gas and coupling built in Python (fd.Gas, fd.gas.Inflow, fd.Coupling, fd.drag.Gidaspow)
+    are the objects its TOML file gives."""
+    import fluidem as fd
+
+    ref = fd.load_case("tsuji-jet")
+    inflow = fd.gas.Inflow(segments=[fd.gas.Segment(superficial=ref.gas.boundaries["bottom"].segments[0].superficial),
+                                     fd.gas.Segment(superficial=39.0, start=0.07, end=0.08)])
+    gas = fd.Gas(dt=ref.gas.dt, grid=fd.gas.Grid(cells=ref.gas.grid.cells, size=ref.gas.grid.size,
+                                                 depth=ref.gas.grid.depth),
+                 boundaries={"left": fd.gas.Wall(), "right": fd.gas.Wall(), "bottom": inflow,
+                             "top": fd.gas.PressureOutlet()},
+                 initial_velocity=ref.gas.initial_velocity)
+    case = fd.Case(name=ref.name, description=ref.description, particles=ref.particles, walls=ref.walls,
+                   time=ref.time, output=ref.output, gas=gas,
+                   coupling=fd.Coupling(drag=fd.drag.Gidaspow(), voidage=fd.VoidageMapping(method="centroid")))
+    assert case.model_dump() == ref.model_dump()
+    assert case.to_toml() == ref.to_toml()

@@ -175,11 +175,18 @@ class VoidageMapping(BaseModel):
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
-    method: Literal["centroid", "area", "area_volume"] = "centroid"
-    to_3d: bool = False
-    smoothing_width: float = Field(0.0, ge=0.0)
-    velocity_weighting: Literal["number", "volume"] = "number"
-    minimum_voidage: float = Field(0.3, gt=0.0, lt=1.0)
+    method: Literal["centroid", "area", "area_volume"] = Field(
+        "centroid", description="solids fraction of a cell: particle volumes by centre (Sun 2007 eq. 34), exact "
+                                "disc areas (Hoomans 1996 §3.4), or volumes shared by disc area")
+    to_3d: bool = Field(False, description="convert the 2D area voidage to 3D with Hoomans 1996 eq. 49 "
+                                           "(method 'area' only)")
+    smoothing_width: float = Field(0.0, ge=0.0, description="standard deviation of the diffusion filter of the "
+                                                            "solids fraction [m]; 0: none")
+    velocity_weighting: Literal["number", "volume"] = Field(
+        "number", description="solids velocity of a cell: number average (Hoomans 1996 eq. 50) or volume "
+                              "average (Sun 2007 eq. 35)")
+    minimum_voidage: float = Field(0.3, gt=0.0, lt=1.0, description="overfull cells are clipped to this "
+                                                                    "voidage [-] (and counted)")
 
     def _check(self) -> None:
         if self.to_3d and self.method != "area":

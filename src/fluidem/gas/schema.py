@@ -93,7 +93,9 @@ class GasSection(_Strict):
     properties: PropertiesSpec = Field(default_factory=PropertiesSpec)
     boundaries: dict[str, BoundaryChoice] = Field(description="a condition on each of left, right, bottom, top")
     initial_velocity: tuple[float, float] = Field((0.0, 0.0), description="interstitial gas velocity at t = 0 [m/s]")
-    convection: Literal["upwind", "tvd"] = "upwind"
+    convection: Literal["upwind", "tvd"] = Field(
+        "upwind", description="convection scheme of the momentum equations: first-order upwind or TVD "
+                              "(second order, Courant limit 0.5)")
     tolerance: float = Field(1e-10, gt=0.0, lt=1.0, description="mass-residual tolerance of each gas step [-]")
     linear_solver: Literal["auto", "band", "multigrid", "superlu", "pyamg"] = Field(
         "auto", description="pressure-correction solver: 'auto' (band LU up to 64 cells across, compiled "

@@ -82,7 +82,7 @@ def check_number(value, *, positive: bool = False):
 
 
 class Pulse(Model):
-    """A velocity that is ``pulse`` for ``start <= t < start + duration`` and ``otherwise`` outside.
+    """A value (velocity or pressure) that is ``pulse`` for ``start <= t < start + duration`` and ``otherwise`` outside.
 
     Times within 1e-9 (relative) of an edge count as on it, so that a time summed from
     steps (0.1 + 0.2) switches where it should (0.3).
@@ -93,10 +93,10 @@ class Pulse(Model):
     Values in [m/s]; times in [s].
     """
 
-    pulse: float = Field(description="velocity during the pulse [m/s]")
-    start: float = Field(0.0, description="[s]")
-    duration: float = Field(math.inf, description="[s]")
-    otherwise: float = Field(0.0, description="velocity outside the pulse [m/s]")
+    pulse: float = Field(description="value during the pulse (a velocity [m/s] or a pressure [Pa])")
+    start: float = Field(0.0, description="start of the pulse [s]")
+    duration: float = Field(math.inf, description="duration of the pulse [s]")
+    otherwise: float = Field(0.0, description="value outside the pulse (the unit of pulse)")
 
     def __init__(self, pulse: float | None = None, /, **data: Any):
         super().__init__(**({"pulse": pulse} if pulse is not None else {}), **data)
@@ -124,14 +124,16 @@ class Pulse(Model):
 
 
 class Table(Model):
-    """A velocity interpolated linearly in time between ``[t, value]`` points, constant beyond the ends.
+    """A value (velocity or pressure) interpolated linearly in time between ``[t, value]`` points, constant beyond the ends.
 
     Example: a slow sweep of the superficial velocity from 0 to 0.4 m/s over 2 s for a
     minimum-fluidisation measurement, ``Table([(0.0, 0.0), (2.0, 0.4)])``, in TOML
     ``superficial = {table = [[0.0, 0.0], [2.0, 0.4]]}``. [s], [m/s].
     """
 
-    table: tuple[tuple[float, float], ...] = Field(min_length=1, description="[[t (s), velocity (m/s)], ...]")
+    table: tuple[tuple[float, float], ...] = Field(
+        min_length=1, description="[[t [s], value], ...]: a velocity [m/s] or a pressure [Pa], linear between "
+                                 "the points")
 
     def __init__(self, table=None, /, **data: Any):
         super().__init__(**({"table": table} if table is not None else {}), **data)

@@ -1,5 +1,8 @@
 """Shared test fixtures. Each fixture is a factory: call it with what the test needs.
 
+Plain functions and constants shared by several test modules live in ``tests/_helpers/``
+(``from _helpers.coupling import MAPPINGS``); test modules never import one another.
+
 Engines are built the way a user would build one: a case dictionary validated by
 ``fluidem.case.validate_case`` whose particles come from a CSV file
 (``placement.method = "file"``) written to the test's ``tmp_path``. When a test
@@ -222,7 +225,7 @@ def stopped_and_resumed(tmp_path):
 
 @pytest.fixture(scope="session")
 def pour_run(tmp_path_factory) -> Path:
-    """A 0.05 s run of the built-in pour case, made once per session (plotting and report tests share it)."""
+    """A 0.05 s run of the built-in pour case, made once per test run (plotting and report tests share it)."""
     out = tmp_path_factory.getbasetemp() / "pour-0.05s"
     if not (out / "summary.json").exists():
         import numba

@@ -38,7 +38,8 @@ def _parse_sets(items: list[str]) -> dict:
 
 def cmd_run(args) -> int:
     from .case import load_case
-    from .simulation import Simulation, summary_json
+    from .io.summary import summary_json
+    from .simulation import Simulation
 
     if args.resume:
         if args.case or args.set:

@@ -6,7 +6,6 @@ say *what to keep*. Observers are objects with ``schedule`` (``Every``/``EveryTi
 """
 from __future__ import annotations
 
-import json
 import logging
 import math
 import time as _time
@@ -23,6 +22,7 @@ from .io.atomic import write_text_atomic
 from .io.gas_fields import GasFieldWriter
 from .io.probes_csv import ProbeWriter
 from .io.restart import RESTART_NAME, load_restart, save_restart
+from .io.summary import finite, summary_json
 from .io.snapshots import ParticleWriter
 from .particles import engine_for
 from .schedule import EveryTime
@@ -347,7 +347,7 @@ class Simulation:
     def summary(self) -> dict:
         """The run's figures (``summary.json``); a quantity that is undefined (NaN, e.g. the multicontact
         ratio of a bed with no contacts) is None (JSON null)."""
-        return _finite(self._summary())
+        return finite(self._summary())
 
     def _summary(self) -> dict:
         eng = self.engine
@@ -445,19 +445,3 @@ class Simulation:
         if threads is not None:
             case.threads = threads
         return cls(case, out_dir=out_dir, resume=True, progress=progress)
-
-
-def _finite(value):
-    """``value`` with every non-finite float (NaN, ±inf) inside dicts and lists replaced by None."""
-    if isinstance(value, dict):
-        return {k: _finite(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_finite(v) for v in value]
-    if isinstance(value, (float, np.floating)) and not math.isfinite(value):
-        return None
-    return value
-
-
-def summary_json(summary: dict) -> str:
-    """``summary`` as strict JSON text (no NaN or Infinity, which pandas, jq and browsers reject)."""
-    return json.dumps(_finite(summary), indent=2, allow_nan=False) + "\n"

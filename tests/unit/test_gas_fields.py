@@ -16,57 +16,20 @@ import h5py
 import numpy as np
 import pytest
 
-from fluidem.case import validate_case
 from fluidem.gas.grid import StaggeredGrid
 from fluidem.gas.solver import GasState
 from fluidem.io.gas_fields import FIELDS, GasFieldWriter, read_gas_fields
 from fluidem.schedule import EveryTime
 from fluidem.simulation import Simulation
 
+from _helpers.gas_fields import run_tiny_jet
+
 NX, NY = 3, 5
-
-
-def tiny_jet_case(end=0.02, snapshot_interval=0.002) -> dict:
-    """A 6 x 24 cell (0.06 x 0.24 m) bed of 60 glass spheres with a central jet: a coupled run of
-    ~1 s wall time per 0.02 s. Gas step 0.2 ms, 14 DEM sub-steps."""
-    return {
-        "name": "tiny-jet",
-        "particles": {
-            "dimensions": 2,
-            "species": [{"name": "glass", "diameter": 0.004, "density": 2500.0, "count": 60}],
-            "contact": {"model": "linear_spring_dashpot", "stiffness": 800.0, "restitution": 0.9, "friction": 0.2},
-            "placement": {"method": "random", "region_lower": [0.0, 0.0, 0.002],
-                          "region_upper": [0.06, 0.05, 0.002], "seed": 3},
-        },
-        "walls": [{"name": "column", "kind": "box", "lower": [0.0, 0.0, 0.0], "upper": [0.06, 0.24, 0.004]}],
-        "gas": {
-            "dt": 2e-4,
-            "grid": {"cells": [6, 24], "size": [0.06, 0.24], "depth": 0.004},
-            "initial_velocity": [0.0, 1.0],
-            "boundaries": {
-                "left": {"kind": "wall"}, "right": {"kind": "wall"}, "top": {"kind": "pressure_outlet"},
-                "bottom": {"kind": "inflow", "voidage": 1.0,
-                           "segments": [{"superficial": 1.0}, {"superficial": 10.0, "start": 0.025, "end": 0.035}]},
-            },
-        },
-        "coupling": {"drag": "gidaspow", "pressure_gradient_force": True},
-        "time": {"end": end},
-        "output": {"snapshot_interval": snapshot_interval, "probe_interval": 0.001, "checkpoint_interval": 0.01},
-    }
-
-
-def run_tiny_jet(out: Path, until=None, **case_kw) -> Simulation:
-    """Run the tiny bed into ``out`` with a GasFieldWriter at the particle snapshot interval."""
-    case = validate_case(tiny_jet_case(**case_kw))
-    sim = Simulation(case, out_dir=out)
-    sim.observers["gas_fields"] = GasFieldWriter(out, EveryTime(case.output.snapshot_interval))
-    sim.run(until=until)
-    return sim
 
 
 # ---------------------------------------------------------------- a stand-in simulation
 def fake_sim(t, step, seed=0, solids=True, beta="array"):
-    """Object with what GasFieldWriter reads: time, step, gas.state, gas.grid (+ last_map, last_beta)."""
+    """Object with what GasFieldWriter reads: time, steps, gas.state, gas.grid (+ last_map, last_beta)."""
     rng = np.random.default_rng(seed)
     grid = StaggeredGrid(cells=(NX, NY), size=(0.03, 0.1), depth=0.004)
     state = GasState(p=1e5 + rng.normal(size=grid.shape), rho=1.2 + 0.01 * rng.random(grid.shape),
@@ -79,7 +42,7 @@ def fake_sim(t, step, seed=0, solids=True, beta="array"):
         gas.last_beta = rng.random(grid.shape) * 1e4
     elif beta == "none":
         gas.last_beta = None  # a coupling before its first gas step
-    return SimpleNamespace(time=t, step=step, gas=gas)
+    return SimpleNamespace(time=t, steps=step, gas=gas)
 
 
 def expected_fields(sim) -> dict[str, np.ndarray]:
@@ -202,7 +165,7 @@ def test_optional_fields(tmp_path):
 
 
 def test_a_run_without_gas_writes_nothing(tmp_path):
-    GasFieldWriter(tmp_path)(SimpleNamespace(time=0.0, step=0, gas=None))
+    GasFieldWriter(tmp_path)(SimpleNamespace(time=0.0, steps=0, gas=None))
     assert not list(tmp_path.iterdir())
 
 
@@ -296,7 +259,7 @@ def test_resumed_run_rewrites_the_snapshots_after_its_checkpoint(tmp_path):
 
     again = Simulation.resume(out)
     writer = GasFieldWriter(out, EveryTime(0.002))
-    writer.truncate_after(again.step)  # what Simulation does for its own observers on resume
+    writer.truncate_after(again.steps)  # what Simulation does for its own observers on resume
     np.testing.assert_allclose(read_gas_fields(out)["time"], np.arange(6) * 0.002, atol=1e-12)
     again.observers["gas_fields"] = writer
     again.run()

@@ -1,7 +1,7 @@
 """Gas figures of ``fluidem plot``: voidage maps, time-averaged solids fraction, pressure and its spectrum,
 and the contact / gas force maps drawn on the gas grid.
 
-The figures are drawn from a tiny coupled run (``test_gas_fields.tiny_jet_case``: 0.02 s,
+The figures are drawn from a tiny coupled run (``_helpers.gas_fields.tiny_jet_case``: 0.02 s,
 11 gas-field snapshots) made once for the module; tests that change data work on copies.
 """
 from __future__ import annotations
@@ -22,8 +22,9 @@ from fluidem.io.gas_fields import read_gas_fields  # noqa: E402
 from fluidem.plotting import PlotOptions, RunData, render, style  # noqa: E402
 from fluidem.plotting.figures import (averaging_window, parse_window, power_spectrum,  # noqa: E402
                                       pressure_probe_cell)
-from test_gas_fields import run_tiny_jet  # noqa: E402
-from test_plotting import assert_not_blank, fluidem, fraction_changed, read_png, stderr_notes  # noqa: E402
+
+from _helpers.gas_fields import run_tiny_jet  # noqa: E402
+from _helpers.plotting import assert_not_blank, fluidem, fraction_changed, read_png, stderr_notes  # noqa: E402
 
 GAS_FIGURES = ("voidage", "solids_fraction", "pressure")
 ONLY_GAS = ("--only", ",".join(GAS_FIGURES))  # plotting every figure of a run takes a few seconds
@@ -175,7 +176,7 @@ def test_power_spectrum_finds_the_frequency_of_a_noisy_sine():
     t = np.arange(0.0, 10.0, 0.01) + rng.uniform(0.0, 2e-4, 1000)  # probes fire on the step after each 10 ms
     y = 300.0 + 40.0 * np.sin(2 * np.pi * 2.7 * t) + 5.0 * rng.normal(size=t.size)
     f, _, dominant = power_spectrum(t, y)
-    assert abs(dominant - 2.7) <= f[1]  # within one frequency bin (0.4 Hz for 250-sample segments)
+    assert abs(dominant - 2.7) <= f[1]  # within one frequency bin (0.2 Hz: segments of half the 1000 samples)
     assert power_spectrum(t[:7], y[:7]) is None
 
 
@@ -196,7 +197,9 @@ def test_pressure_probe_columns_give_the_traces_and_dominant_frequencies(copy_ru
     legend = [tx.get_text() for tx in spectrum.get_legend().get_texts()]
     assert [lab.split(":")[0] for lab in legend] == ["pressure drop 20cm", "p probe"]
     found = [float(re.fullmatch(r".+: dominant ([0-9.]+) Hz", lab).group(1)) for lab in legend]
-    bin_width = 1.0 / (256 * 0.005)  # 400 samples: one 256-sample Welch segment at 200 Hz
+    # 0.78 Hz: within a bin of the former 256-sample segments; the 200-sample segments of power_spectrum have
+    # 1 Hz bins and place the dominant frequency between them
+    bin_width = 1.0 / (256 * 0.005)
     assert abs(found[0] - 4.0) < bin_width and abs(found[1] - 7.0) < bin_width, found
     assert spectrum.get_xlabel() == "frequency [Hz]" and spectrum.get_yscale() == "log"
 

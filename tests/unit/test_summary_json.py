@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from fluidem.simulation import summary_json
+from fluidem.io.summary import summary_json
 
 
 def _reject(name):

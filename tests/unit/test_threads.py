@@ -44,8 +44,8 @@ print(start[-1])
 
 def test_a_cached_kernel_with_a_parallel_kernel_inside_runs_in_a_fresh_process():
     """The hard-sphere list build runs the parallel pair search inside compiled code. Loaded from the
-    cache in a process that has not started Numba's thread pool, such a call crashed the process
-    (numba issue #8578); importing fluidem now starts the pool (``_threads.launch_pool``). Two fresh
+    cache in a process that has not started Numba's thread pool, such a call crashes the process
+    (numba/numba#8578), so importing fluidem starts the pool (``_threads.launch_pool``). Two fresh
     processes: the first compiles or loads the kernel, the second surely loads it from the cache."""
     runs = [subprocess.run([sys.executable, "-c", CACHED_NESTED_PARALLEL], capture_output=True, text=True,
                            timeout=600) for _ in range(2)]

@@ -9,7 +9,7 @@ gas force + walls − 1 = d(Σ m v)/dt / W closes the budget.
 
     python tests/validation/bed_budget.py [case=NAME] [KEY=VALUE ...]   (overrides as ``fluidem run --set``)
 
-Measured 2026-11-26 (fourteenth session, folded boundary faces and paired pressure force):
+Measured with the boundary faces folded and the pressure force paired (the defaults):
 
     tsuji-jet     Δp A / W 0.852, gas force 0.877, gas gave up 0.877; bottom 0.068, side walls 0.018;
                   d(Σ m v)/dt / W −0.038 (the bed's upward momentum fell over this window)
@@ -57,4 +57,7 @@ def main(argv):
 
 
 if __name__ == "__main__":
+    if "--help" in sys.argv or "-h" in sys.argv:
+        print(__doc__)
+        sys.exit(0)
     main(sys.argv[1:])

@@ -21,8 +21,8 @@ Model (the case files): Hoomans' own coupling, ``drag = "hoomans1996_total"``: e
 total gas force of eqs 35-39 (no separate −V_p∇p, eq. 34), the gas takes β of eqs 45-47 from the cell
 (``momentum_exchange = "cell_beta"``), voidage by disc area converted with eq. 49. With it the bed pressure
 drop meets the bed weight per area (ideal orifice run: 3482 Pa over T0-0.2 to T0, 3632 Pa from T0, against
-W/A = 3551 Pa). Until 2026-11-22 the cases used Ergun/Wen-Yu (eqs 45-47) on the particles plus −V_p∇p;
-that model's results are given below for comparison.
+W/A = 3551 Pa). The results of Ergun/Wen-Yu (eqs 45-47) on the particles plus −V_p∇p are given below
+for comparison.
 
 Start-up (Hoomans §4.1, the case files): 0 to T0 = 0.5 s the lattice under the u_mf background alone
 (4.5 m/s interstitial on every bottom cell); from T0 the case's inflow, to T0 + 1 s. Without the jet the
@@ -51,7 +51,7 @@ tens of percent with round-off (a first realisation gave pressure std 518 vs 292
 1.77x; the three below give 2.34x): "no bubble", "slugs" and the bubble at the orifice are required of
 every run, the contrasts (largest bubble, pressure fluctuations) of the means over the runs.
 
-What this model gave (three runs each, T0 + 1 s, times from the jet onset T0; 2026-11-22, hoomans1996_total):
+What this model gave (three runs each, T0 + 1 s, times from the jet onset T0; hoomans1996_total):
 - orifice, non-ideal: the start-up bubble is there at T0 (not on the orifice), bubbles in all 101
   snapshots, slugs in 53-80, largest bubble 260-454 cm2 (mean 335); ideal: smaller bubbles in 31-39
   snapshots from T0+0.05 s, 42-62 cm2 at most (mean 55), no slug. Pressure 20 cm up from T0: std 722 vs
@@ -60,7 +60,7 @@ What this model gave (three runs each, T0 + 1 s, times from the jet onset T0; 20
   snapshots from T0+0.09-0.13 s, up to 108-126 cm2, slugs in 8-13 snapshots at T0+0.24-0.39 s.
   Pressure: std 791 vs 383 Pa (2.07x), peak-to-peak 3569 vs 1336 Pa (2.67x).
 - Tsuji's jet: bubbles in 68-73 snapshots T0 to the end, up to 128-166 cm2, slugs in 23-25 to T0+0.77 s.
-The former model (Ergun/Wen-Yu + −V_p∇p, "particle" exchange; one run): orifice non-ideal 390 cm2, slugs
+Ergun/Wen-Yu + −V_p∇p instead ("particle" exchange; one run): orifice non-ideal 390 cm2, slugs
 in 82 snapshots, ideal 198 cm2 with slugs at T0+0.38-0.52 s, pressure std 2216 vs 369 Pa; slug case ideal
 slugs in 31 snapshots, bubbles up to 274 cm2; Tsuji's jet bubbles in 90 snapshots, up to 120 cm2. The ideal
 beds bubble far less with Hoomans' own model; the non-ideal beds' pressure swings are a third.

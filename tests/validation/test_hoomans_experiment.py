@@ -15,7 +15,7 @@ the lowest row in one of the three orifice columns.
 - during the pulse (0.2-0.4 s) one forms on it and grows at least ``WIDER`` times the orifice's width
   (a bubble, not the jet channel of the orifice's own width).
 
-Measured (2026-11-22, 3 min on one core, 1.04e8 collisions): on the orifice from 0.22 s (1 cm2), growing
+Measured (3 min on one core, 1.04e8 collisions): on the orifice from 0.22 s (1 cm2), growing
 to 21 cm2 and 18 cells (90 mm) wide at 0.31 s, then lifting off (lowest row 1 at 0.32 s, 3 at 0.33 s) and
 rising; a second one forms on the orifice at 0.35-0.41 s (7 cm2). The run is chaotic: after a change of
 the voidage map at round-off level the same case gave a bubble on the orifice at 0.22-0.30 s, up to 7 cells

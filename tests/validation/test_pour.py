@@ -6,7 +6,7 @@ Published area fraction of the settled bed: 0.832 ± 0.010 (Hoomans, hard sphere
 Known disagreement (recorded, not tuned away): our soft-sphere `pour` case settles
 denser, 0.846–0.859 over four placement seeds (1996, 1, 2, 3) with k_n = 800 N/m, and
 0.854 with k_n = 8000 N/m (overlaps 10× smaller), so it is not contact compliance.
-A single pour is chaotic: a change of round-off alone (the flat 2D pair loop, ninth session)
+A single pour is chaotic: a change of round-off alone (the flat 2D pair loop)
 moved seed 1996 from 0.8476 to 0.8416, just inside the span, while seeds 1–5 gave
 0.853, 0.848, 0.848, 0.852, 0.856. The published-span test therefore reads the mean over
 the four seeds (0.848 now) and is a strict xfail: it turns into a failure the day the model

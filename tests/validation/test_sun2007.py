@@ -17,17 +17,14 @@ Published (Sun 2007 §4):
 
 Bands: the mean height must fall between Sun's TF-DEM value minus 15 % and the
 experiment plus 15 % (the three published numbers span 8.9–11.4 cm). "Around" values are
-read as ±50 %. What this model gave last (2026-11-22, default "particle" exchange and
-"substep" drag): goldschmidt 9.33 cm, coordination 0.34, multicontact ratio 0.23 (ninth session, two seeds
-after a round-off change: 9.23-9.26 cm, 0.303-0.308, 0.216-0.219; the same seed-11 run before it 9.33 cm,
-0.329, 0.231: the 5-10 s means move by about 0.03 in coordination from run to run); tsuji-jet coordination
-0.58 and multicontact ratio 0.45 (5–10 s; 0.61 and 0.46 with the former gas step of 1e-4 s), below Sun's
-1.2 and 0.6 — the strict xfail below keeps that disagreement visible; tsuji-jet-closed 1.35 and 0.66
-(1.36 and 0.67 with 1e-4 s).
-Fourteenth session (2026-11-26), with the boundary faces folded and the pressure force paired
-(``coupling.boundary_faces``, ``pressure_pairing``): goldschmidt 9.39 cm, 0.314, 0.212; tsuji-jet 18.6 cm,
-0.576, 0.443; tsuji-jet-closed 14.2 cm, 1.42, 0.68 (``NUMBA_NUM_THREADS=1 python -m pytest -m validation
-tests/validation/test_sun2007.py -s``, 11.5 min).
+read as ±50 %. Measured with the defaults ("particle" exchange, "substep" drag, boundary faces folded
+and the pressure force paired: ``coupling.boundary_faces``, ``pressure_pairing``; ``NUMBA_NUM_THREADS=1
+python -m pytest -m validation tests/validation/test_sun2007.py -s``, 11.5 min): goldschmidt 9.39 cm,
+coordination 0.314, multicontact ratio 0.212; tsuji-jet 18.6 cm, 0.576, 0.443, below Sun's 1.2 and 0.6 —
+the strict xfail below keeps that disagreement visible; tsuji-jet-closed 14.2 cm, 1.42, 0.68. A change of
+round-off alone moves the 5–10 s means by about 0.03 in coordination (goldschmidt with the boundary faces
+exchanged and the pressure force unpaired: 9.33 cm, 0.329, 0.231 for seed 11; after a round-off change
+9.23–9.26 cm, 0.303–0.308, 0.216–0.219 over two seeds).
 Each run takes 2–15 minutes on this 2-core machine.
 """
 import json

@@ -1,35 +1,36 @@
-"""Validation: a slow sweep of superficial velocity through a coupled bed (issue 4).
+"""Validation: a slow sweep of superficial velocity through a coupled bed.
 
 A 3D bed of 12,000 glass spheres of 0.5 mm, 60 × 10 diameters in plan (gas grid 2D, 15 × 15
 cells of 4 d × 4 d, depth 10 d), frictionless particles so that it packs near ε ≈ 0.39, sits on
 an inflow whose superficial velocity rises linearly from 0 to 0.5 m/s over 1 s after 0.15 s
-of settling. The width-averaged pressure drop over the bed (analysis.fluidised.pressure_drop,
-minus the gas weight) is sampled every 5 ms.
+of settling (``_helpers.umf_sweep``). The width-averaged pressure drop over the bed
+(analysis.fluidised.pressure_drop, minus the gas weight) is sampled every 5 ms.
 
-- the pressure drop levels off at the bed's buoyant weight over area, W/A (issue: 3 %);
+- the pressure drop levels off at the bed's buoyant weight over area, W/A (required: within 3 %);
 - u_mf, found as in the laboratory (Ergun-form fit of the fixed-bed branch meeting W/A),
-  against Wen & Yu (1966) (issue: 10 %).
+  against Wen & Yu (1966) (required: within 10 %).
 
-Measured (2026-11-26, fourteenth session, one core, 4 min: ``NUMBA_NUM_THREADS=1 python -m pytest -m validation
+Measured (one core, 4 min: ``NUMBA_NUM_THREADS=1 python -m pytest -m validation
 tests/validation/test_umf_sweep.py -s``): W/A = 128.35 Pa, plateau 124.59 Pa (−2.9 %), u_mf = 0.2022 m/s
 against Wen–Yu 0.1885 m/s (+7.3 %). Δp / (W/A) by superficial velocity: 0.989 at 0.20-0.25 m/s, 0.95-0.98
-from 0.25 to 0.45 m/s, 0.980 at 0.45-0.50 m/s. The margin to the issue's 3 % is thin: what is missing
+from 0.25 to 0.45 m/s, 0.980 at 0.45-0.50 m/s. The margin to the required 3 % is thin: what is missing
 is the weight the bottom wall carries, 2.5-3 % in impacts of the slugging bed (below).
 
-History: until the thirteenth session the plateau was −4.6 % (strict xfail). Two things in the coupling
-took weight off the gas (``umf_budget.py``): the particles in the half cell above the inflow took part of
-their drag from the inflow face (exchanged with the boundary, not carried by the gas pressure), and the gas's
-−ε∇p used the mapped face voidage, which gave up ~8 % less pressure force than the particles' −V_p∇p gained
-near the inflow. Now ``coupling.boundary_faces = "fold"`` and ``pressure_pairing`` (defaults): the first
-interior face takes the half cell along the boundary (its control volume 1.5 cells), and the gas's pressure
-term takes the voidage left by the particle volume deposited on each face, so both drag and pressure force
-are exchanged exactly. Held at 0.3 m/s in this bed (``python tests/validation/umf_budget.py 1.0 particle 0.3
---wide``, 0.35-0.65 s): Δp / (W/A) 0.968, gas force on the particles 0.968 m g, the same given up by the gas,
-bottom wall 0.028 m g.
+The plateau needs the gas to carry all the weight the particles lose to it (``umf_budget.py``). With
+``coupling.boundary_faces = "fold"`` and ``pressure_pairing`` (the defaults) the first interior face takes
+the half cell along the boundary (its control volume 1.5 cells), and the gas's pressure term takes the
+voidage left by the particle volume deposited on each face, so both drag and pressure force are exchanged
+exactly. Without them two things take weight off the gas, and the plateau was −4.6 %: the particles in
+the half cell above the inflow take part of their drag from the inflow face (exchanged with the boundary,
+not carried by the gas pressure), and the gas's −ε∇p, with the mapped face voidage, gives up ~8 % less
+pressure force than the particles' −V_p∇p gain near the inflow. Held at 0.3 m/s in this bed (``python
+tests/validation/umf_budget.py 1.0 particle 0.3 --wide``, 0.35-0.65 s): Δp / (W/A) 0.968, gas force on
+the particles 0.968 m g, the same given up by the gas, bottom wall 0.028 m g.
 
 The bed's walls raise u_mf: Wen & Yu's correlation is for beds whose walls do not matter,
-and the loosely packed layers along the walls let gas by. Same sweep before the change, same particles per
-unit bed area (``python`` runs of this module's case with other W, DEPTH, N):
+and the loosely packed layers along the walls let gas by. Same sweep with the boundary faces exchanged
+and the pressure force unpaired, same particles per unit bed area (``_helpers.umf_sweep.sweep_case`` with
+other n, width, depth):
   20 d wide, 5 d deep, 2000 spheres:   u_mf 0.233 m/s (+24 %), plateau −3.8 %
   60 d wide, 5 d deep, 6000 spheres:   u_mf 0.222 m/s (+18 %), plateau −2.7 %
   60 d wide, 10 d deep, 12000 spheres: u_mf 0.202 m/s (+7.3 %), plateau −4.6 %  (this test)
@@ -41,36 +42,11 @@ import numpy as np
 import pytest
 
 from fluidem.analysis.fluidised import minimum_fluidisation, pressure_drop, wen_yu_umf
-from fluidem.case import validate_case
 from fluidem.simulation import Simulation
 
+from _helpers.umf_sweep import D, DEPTH, G, H, MU, N, RHO, RHO_P, T_SETTLE, T_SWEEP, U_MAX, W, sweep_case
+
 pytestmark = pytest.mark.validation
-
-D, RHO_P, MU, RHO, G = 0.5e-3, 2500.0, 1.8e-5, 1.2, 9.81
-N, W, DEPTH, H = 12000, 60 * D, 10 * D, 60 * D
-T_SETTLE, T_SWEEP, U_MAX = 0.15, 1.0, 0.5
-
-
-def sweep_case():
-    return validate_case({
-        "name": "umf-sweep", "gravity": [0.0, -G, 0.0],
-        "particles": {
-            "dimensions": 3, "species": [{"diameter": D, "density": RHO_P, "count": N}],
-            "contact": {"model": "linear_spring_dashpot", "stiffness": 20.0, "restitution": 0.5, "friction": 0.0},
-            "placement": {"method": "random", "region_lower": [0, 0, 0], "region_upper": [W, H, DEPTH], "seed": 1},
-        },
-        "walls": [{"name": "box", "kind": "box", "lower": [0, 0, 0], "upper": [W, H, DEPTH]}],
-        "time": {"end": T_SETTLE + T_SWEEP, "dt_fraction": 0.05},
-        "gas": {
-            "dt": 2e-4, "grid": {"cells": [round(W / (4 * D)), 15], "size": [W, H], "depth": DEPTH},
-            "properties": {"viscosity": MU, "density": RHO},
-            "boundaries": {"left": {"kind": "free_slip"}, "right": {"kind": "free_slip"},
-                           "bottom": {"kind": "inflow", "voidage": 1.0, "superficial": {
-                               "table": [[0.0, 0.0], [T_SETTLE, 0.0], [T_SETTLE + T_SWEEP, U_MAX]]}},
-                           "top": {"kind": "pressure_outlet"}},
-        },
-        "coupling": {"drag": "gidaspow"},
-    })
 
 
 @pytest.fixture(scope="module")

@@ -1,8 +1,8 @@
 """Where the weight of the u_mf-sweep bed goes when fluidised (diagnostic for test_umf_sweep.py).
 
-The sweep case held at 0.4 m/s (2.1 u_mf) after settling, in the sweep's first, smaller bed
-(2000 spheres, 20 × 5 diameters, 5 × 15 cells: the figures quoted in test_umf_sweep.py; the
-test itself now sweeps a 60 × 10 d bed); over 0.35-0.65 s it prints the
+The sweep case (``_helpers.umf_sweep``) held at 0.4 m/s (2.1 u_mf) after settling, in a smaller bed
+than the test's (2000 spheres, 20 × 5 diameters, 5 × 15 cells: the first row of figures quoted in
+test_umf_sweep.py; ``--wide`` runs the test's 60 × 10 d bed); over 0.35-0.65 s it prints the
 bed pressure drop over W/A, the gas force on the particles (drag + −V_p∇p) over their
 weight m g, and the bottom wall's force over m g (sampled every gas step, as the floor's
 load comes in impacts): the last two add up to 1 less the particles' mean acceleration.
@@ -11,14 +11,6 @@ load comes in impacts): the last two add up to 1 less the particles' mean accele
     python tests/validation/umf_budget.py [INFLOW_VOIDAGE] [MOMENTUM_EXCHANGE] [U] [--profile]
         [--exchange-faces] [--no-pairing] [--centre] [--wide] [--frozen]
 
-Measured 2026-11-22 (``python tests/validation/umf_budget.py 1.0 particle --profile``: inflow voidage 1,
-0.4 m/s, 0.35-0.65 s): Δp / (W/A) 0.952, gas force 0.933 m g, bottom wall 0.062 m g (touched in 75 %
-of the gas steps). By height: 0.87 and 0.94 in the two lowest diameters (the gas there is
-interpolated towards the inflow face's slower superficial velocity), 1.12-1.15 at 3-6 d, and
-0.35-0.89 in the top layers (17-25 d): the bed slugs, the plug thrown up falls back onto the floor.
-(The figures quoted in test_umf_sweep.py took the gas force as the fixed part of the engine's
-external force, without its −K v part at the sub-step's velocity.)
-
 Options: ``--exchange-faces`` (``coupling.boundary_faces = "exchange"``), ``--no-pairing``
 (``coupling.pressure_pairing = false``), ``--centre`` (the pressure drop from the first row of centres
 instead of the inlet pressure extrapolated from the first two rows), ``--wide`` (the test's own 60 × 10 d
@@ -26,10 +18,9 @@ bed of 12,000 spheres instead of the 20 × 5 d one), ``--frozen`` (``drag_update
 figure printed is the drag and pressure force the gas gave up (``GasCoupling.exchange_balance``; the
 pressure part only with pairing).
 
-Thirteenth session (2026-11-26), before the change: Δp / (W/A) 0.953, gas force 0.934 m g, floor 0.060 m g
-(boundary faces exchanged, pressure unpaired). Fourteenth session (2026-11-26),
-``python tests/validation/umf_budget.py 1.0 particle [U] [options]``, 0.4 m/s unless given; Δp / (W/A), gas
-force / m g, floor / m g (share of gas steps with the floor touched), given up by the gas / m g:
+Measured (``python tests/validation/umf_budget.py 1.0 particle [U] [options]``, 0.4 m/s unless given;
+Δp / (W/A), gas force / m g, floor / m g (share of gas steps with the floor touched), given up by the
+gas / m g):
 
     defaults (fold, pairing)                 0.974, 0.974, 0.026 (71 %), 0.974
     --centre                                 0.859 (the first interior faces' half cell left out)
@@ -44,11 +35,15 @@ the floor's 2.5-3 % is what keeps the plateau below W/A, the load of particles f
 this slugging bed. Without pairing the gas's −ε∇p (mapped ε) gives up less pressure force than the
 particles gain; with the exchanged boundary faces the particles above the inflow hand 2 % of the drag to
 the inflow and more of the bed rests on the floor (and the extrapolated inlet pressure, which belongs to
-the folded faces' control volumes, no longer matches what the gas carries). A first version of the fold
-(fourteenth session) divided the first interior face's sums by V_cell although they gather 1.5 cells of
-particles: β 1.5× and the pressure voidage clipped at the minimum in a packed bed, the lowest particles
-pushed at 1.2× their weight and tsuji-jet's bed 5 cm higher (0.240 against 0.186 m over 5-10 s);
-``_paired_kernels.face_volumes`` is the repair.
+the folded faces' control volumes, no longer matches what the gas carries). With both (boundary faces
+exchanged, pressure unpaired): Δp / (W/A) 0.952-0.953, gas force 0.933-0.934 m g, floor 0.060-0.062 m g
+(touched in 75 % of the gas steps); by height (``--profile``) 0.87 and 0.94 in the two lowest diameters
+(the gas there is interpolated towards the inflow face's slower superficial velocity), 1.12-1.15 at
+3-6 d, and 0.35-0.89 in the top layers (17-25 d): the bed slugs, the plug thrown up falls back onto the
+floor. The folded faces' sums are divided by their own control volume of 1.5 cells
+(``coupling.exchange.face_volumes``); divided by V_cell, β comes out 1.5× and the pressure voidage clips
+at the minimum in a packed bed: the lowest particles are pushed at 1.2× their weight and tsuji-jet's
+bed stands 5 cm higher (0.240 against 0.186 m over 5-10 s).
 """
 import math
 import sys
@@ -56,13 +51,13 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-import test_umf_sweep as T  # noqa: E402
+from fluidem.analysis.fluidised import pressure_drop
+from fluidem.analysis.probes import wall_forces
+from fluidem.case import validate_case
+from fluidem.simulation import Simulation
 
-from fluidem.analysis.fluidised import pressure_drop  # noqa: E402
-from fluidem.analysis.probes import wall_forces  # noqa: E402
-from fluidem.case import validate_case  # noqa: E402
-from fluidem.simulation import Simulation  # noqa: E402
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tests/, for _helpers
+from _helpers import umf_sweep as T  # noqa: E402
 
 
 def from_first_centre(grid, p, height):
@@ -74,11 +69,11 @@ def from_first_centre(grid, p, height):
 
 def main(eps_in=1.0, exchange="particle", u=0.4, end=0.65, start=0.35, profile=False, faces="fold", pairing=True,
          wide=False, update="substep"):
-    if not wide:
-        T.N, T.W, T.DEPTH = 2000, 20 * T.D, 5 * T.D  # the 20 x 5 d bed (5 x 15 cells of 4 d)
-    c = T.sweep_case().model_dump(mode="json", exclude_none=True)
+    n, w, depth = (T.N, T.W, T.DEPTH) if wide else (2000, 20 * T.D, 5 * T.D)  # the 20 x 5 d bed: 5 x 15 cells of 4 d
+    c = T.sweep_case(n, w, depth).model_dump(mode="json", exclude_none=True)
     bottom = c["gas"]["boundaries"]["bottom"]
     bottom["voidage"] = eps_in
+    bottom.pop("segments")  # the sweep's ramp, replaced by a ramp to u held from T_SETTLE + 0.1 s
     bottom["superficial"] = {"table": [[0.0, 0.0], [T.T_SETTLE, 0.0], [T.T_SETTLE + 0.1, u], [10.0, u]]}
     c["coupling"]["momentum_exchange"] = exchange
     c["coupling"]["boundary_faces"] = faces
@@ -89,7 +84,7 @@ def main(eps_in=1.0, exchange="particle", u=0.4, end=0.65, start=0.35, profile=F
     chunk = int(round(0.005 / sim.dt))
     st = sim.state
     weight = float(np.sum(st.mass)) * T.G
-    wa = T.N * math.pi / 6 * T.D**3 * (T.RHO_P - T.RHO) * T.G / (T.W * T.DEPTH)
+    wa = n * math.pi / 6 * T.D**3 * (T.RHO_P - T.RHO) * T.G / (w * depth)
     eng = sim.engine
     mg = st.mass * T.G
     layers = np.zeros((2, 60))  # Σ gas force, Σ m g per one-diameter layer
@@ -118,6 +113,9 @@ def main(eps_in=1.0, exchange="particle", u=0.4, end=0.65, start=0.35, profile=F
 
 
 if __name__ == "__main__":
+    if "--help" in sys.argv or "-h" in sys.argv:
+        print(__doc__)
+        sys.exit(0)
     if "--centre" in sys.argv:
         pressure_drop = from_first_centre  # noqa: F811 (main reads the module's name)
     args = [a for a in sys.argv[1:] if not a.startswith("--")]

@@ -1,4 +1,4 @@
-"""Through the coupled path, a frozen packed bed gives Ergun's pressure drop (issue: within 2 %).
+"""Through the coupled path, a frozen packed bed gives Ergun's pressure drop (required: within 2 %).
 
 Particles sit on a square lattice, 16 per gas cell and none cut by a cell face, so every
 bed cell has the same voidage whichever mapping is used; they are never moved (the
@@ -88,7 +88,7 @@ def test_frozen_packed_bed_gives_ergun(write_particles, superficial, method):
     frictional = dp / ((j1 - j0) * grid.dy) - RHO * G
     expected = ergun_gradient(eps, superficial)
     err = np.abs(frictional / expected - 1.0).max()
-    # issue tolerance 2 %; plug flow through uniform cells is an exact discrete solution (measured ~1e-10)
+    # required tolerance 2 %; plug flow through uniform cells is an exact discrete solution (measured ~1e-10)
     assert err < 0.02, err
     # (The drop across the bed surface row is not Ergun's: that face sees the mean of a bed and a free
     # cell, a discretisation of the surface, so the check stays inside the bed.)

@@ -1,20 +1,21 @@
 """A coupled run stopped at a checkpoint and resumed equals the run made in one go, bit for bit: the
 gas state, the phase within the gas step and the pressure-matrix factors the next gas step reuses
-(``jacobian_reuse``) are in the restart file. Before the factors were (fifteenth session), the resumed
-solver factorised afresh and the two runs agreed only to the gas tolerance, which a bubbling bed
-amplifies into another flow within a fraction of a second."""
+(``jacobian_reuse``) are in the restart file. Without the factors the resumed solver would factorise
+afresh and the two runs would agree only to the gas tolerance, which a bubbling bed amplifies into
+another flow within a fraction of a second."""
 import numpy as np
 import pytest
 
 from fluidem.case import validate_case
-from test_coupled_settling import settling_case
+
+from _helpers.settling import settling_case
 
 
 def test_resumed_coupled_run_matches_the_uninterrupted_one(stopped_and_resumed):
     case = validate_case(settling_case(end=0.02))
     whole, first, again = stopped_and_resumed(case, 0.0105)  # stops inside a gas step (DT = 1 ms)
-    assert first.step % first.gas.substeps != 0
-    assert again.step == whole.step
+    assert first.steps % first.gas.substeps != 0
+    assert again.steps == whole.steps
     for k in ("position", "velocity", "omega"):
         assert np.array_equal(getattr(again.state, k), getattr(whole.state, k)), k
     for k in ("p", "rho", "u", "v", "voidage"):

@@ -20,31 +20,7 @@ from fluidem.coupling import drag_laws
 from fluidem.errors import CaseError
 from fluidem.simulation import Simulation
 
-D, RHO_P, MU, G = 100e-6, 2500.0, 1.8e-5, 9.81
-X0, Y0 = 0.015, 0.28
-
-
-def settling_case(drag="hoomans1996", density=1.2, pressure_gradient_force=True, end=0.4, **coupling):
-    return {
-        "name": "settling",
-        "gravity": [0.0, -G, 0.0],
-        "particles": {
-            "dimensions": 2,
-            "species": [{"diameter": D, "density": RHO_P, "count": 1}],
-            "contact": {"model": "linear_spring_dashpot", "stiffness": 1e-3, "restitution": 0.9},
-            "placement": {"method": "random", "region_lower": [X0 - 1e-4, Y0 - 1e-4, 0.0],
-                          "region_upper": [X0 + 1e-4, Y0 + 1e-4, 0.0]},
-        },
-        "time": {"end": end},
-        "gas": {
-            "dt": 1e-3,
-            "grid": {"cells": [3, 30], "size": [0.03, 0.3], "depth": 1.0},
-            "properties": {"viscosity": MU} | ({"density": density} if density is not None else {}),
-            "boundaries": {"left": {"kind": "wall"}, "right": {"kind": "wall"}, "bottom": {"kind": "wall"},
-                           "top": {"kind": "pressure_outlet"}},
-        },
-        "coupling": {"drag": drag, "pressure_gradient_force": pressure_gradient_force} | coupling,
-    }
+from _helpers.settling import D, G, MU, RHO_P, settling_case
 
 
 def terminal_velocity(drag, rho_g, buoyancy):

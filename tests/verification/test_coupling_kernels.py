@@ -22,16 +22,9 @@ from fluidem.coupling.exchange import GasCoupling
 from fluidem.coupling.voidage import EQ49_FACTOR, SolidsMap
 from fluidem.gas.solver import GasState
 
+from _helpers.coupling import MAPPINGS, random_gas, random_particles
+
 RTOL = 1e-12
-MAPPINGS = {
-    "centroid-number": {"method": "centroid"},
-    "centroid-volume": {"method": "centroid", "velocity_weighting": "volume", "minimum_voidage": 0.4},
-    "area-number-3d-smoothed": {"method": "area", "to_3d": True, "smoothing_width": 0.012},
-    "area-volume": {"method": "area", "velocity_weighting": "volume"},
-    "area_volume-number": {"method": "area_volume", "minimum_voidage": 0.35},
-    "area_volume-volume-smoothed": {"method": "area_volume", "velocity_weighting": "volume",
-                                    "smoothing_width": 0.005},
-}
 
 
 # ------------------------------------------------------------------ NumPy reference
@@ -175,28 +168,6 @@ def ref_map(mapping, grid, pos, radius, vel):
 
 
 # ------------------------------------------------------------------ set-up
-def random_particles(grid, n, seed):
-    """Polydisperse discs uniform over the domain and a little beyond it, plus centres on faces and walls."""
-    rng = np.random.default_rng(seed)
-    lx, ly = grid.size
-    pos = np.column_stack([rng.uniform(-0.02 * lx, 1.02 * lx, n), rng.uniform(-0.01 * ly, 1.01 * ly, n),
-                           rng.uniform(0.0, 0.004, n)])
-    k = n // 8  # centres exactly on x- and y-faces (where trunc(x/dx) and floor(x/dx) may part) and walls
-    pos[:k, 0] = rng.integers(0, grid.shape[0] + 1, k) * grid.dx
-    pos[k:2 * k, 1] = rng.integers(0, grid.shape[1] + 1, k) * grid.dy
-    pos[2 * k:2 * k + 4, :2] = [[0.0, 0.0], [lx, ly], [0.0, ly], [lx, 0.0]]
-    radius = rng.choice([1.5e-3, 2e-3, 2.5e-3], n)  # few sizes: cells repeat diameters
-    vel = rng.normal(0.0, 0.5, (n, 3))
-    return pos, radius, vel
-
-
-def random_gas(grid, seed):
-    rng = np.random.default_rng(seed)
-    c, fu, fv = grid.shape, grid.u_shape, grid.v_shape
-    return GasState(p=1.013e5 + rng.normal(0.0, 300.0, c), rho=rng.uniform(0.9, 1.5, c),
-                    u=rng.normal(0.0, 1.5, fu), v=rng.normal(1.0, 3.0, fv), voidage=rng.uniform(0.2, 1.0, c))
-
-
 def coupling(drag, mapping, pgf=True, dim2=True, n=600, seed=11, random_state=True, exchange="cell_beta"):
     """GasCoupling of the tsuji-jet case over a stand-in engine holding random particles (no −V_p∇p for a
     law that gives the total gas force, which the case validation requires)."""
@@ -341,7 +312,7 @@ def test_paired_kernels_give_the_same_bits_on_any_number_of_threads(all_threads,
         kc = np.zeros(gd.shape)
         face = [np.zeros(gd.u_shape), np.zeros(gd.u_shape), np.zeros(gd.v_shape), np.zeros(gd.v_shape)]
         pv = [np.zeros(gd.u_shape), np.zeros(gd.v_shape)]
-        bad = P.deposit(cpl.drag.code, st.position, st.velocity, st.radius, cpl.volume, gs.u, gs.v, gs.voidage,
+        bad = P.deposit(cpl.drag.pack(), st.position, st.velocity, st.radius, cpl.volume, gs.u, gs.v, gs.voidage,
                         gs.rho, cpl.solver.props.viscosity, gd.dx, gd.dy, 0.0, *cpl._periodic, kp, *sums, kc,
                         gd.cell_volume, *cpl._face_volumes, *face, True, *pv, parallel)
         return bad, [kp, kc, *sums, *face, *pv]

@@ -56,7 +56,7 @@ def test_ergun_pressure_drop_constant_density(re_p):
     length = (j1 - j0) * grid.dy
     frictional = dp / length - 1.2 * G  # minus the weight of the gas
     expected = ergun_gradient(superficial, 1.2)
-    # issue tolerance 0.5 %; plug flow is an exact discrete solution, so the error is round-off
+    # required tolerance 0.5 %; plug flow is an exact discrete solution, so the error is round-off
     assert np.abs(frictional / expected - 1.0).max() < 5e-3
     assert np.abs(frictional / expected - 1.0).max() < 1e-8
     assert np.abs(state.v[:, 1:-1] - superficial / EPS).max() < 1e-9 * superficial / EPS

@@ -15,7 +15,7 @@ from fluidem.gas import GasProperties, GasSolver, Inflow, PressureOutlet, Segmen
 
 GRID = StaggeredGrid(cells=(15, 25), size=(0.15, 0.5), depth=0.004)
 D_P, MU = 4e-3, 1.8e-5
-BALANCE_TOL = 1e-8  # the tolerance; the solver's mass residual (1e-10) bounds it
+BALANCE_TOL = 1e-8  # the required tolerance; the solver's mass residual (1e-10) bounds it
 
 
 def jet_bed(density):

@@ -50,7 +50,7 @@ def steady_profile(n: int, *, driven_by: str = "source") -> tuple[np.ndarray, np
 def test_poiseuille_profile_within_half_percent_on_20_cells():
     y, u, _ = steady_profile(20)
     err = np.abs(u - analytic(y)).max() / analytic(0.5 * H)
-    # tolerance from the issue (0.5 %); the discretisation error is exactly (1/20)^2 = 0.25 %
+    # required tolerance 0.5 %; the discretisation error is exactly (1/20)^2 = 0.25 %
     assert err < 5e-3
     assert err == pytest.approx(1.0 / 20**2, rel=1e-3)
     assert np.ptp(u, axis=0).max() < 1e-12  # fully developed: the same at every x-face
@@ -62,7 +62,7 @@ def test_poiseuille_order_of_accuracy():
         y, u, _ = steady_profile(n)
         errors.append(np.abs(u[0] - analytic(y)).max() / analytic(0.5 * H))
     order = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
-    assert np.all(order >= 1.8), (errors, order)  # issue: observed order >= 1.8 (second-order scheme: 2.0)
+    assert np.all(order >= 1.8), (errors, order)  # required: observed order >= 1.8 (second-order scheme: 2.0)
 
 
 def test_pressure_driven_poiseuille_between_pressure_boundaries():

@@ -1,4 +1,4 @@
-"""Gas and particles exchange drag as equal and opposite momentum (issue 4, Sun 2007 eqs 28-33).
+"""Gas and particles exchange drag as equal and opposite momentum (Sun 2007 eqs 28-33).
 
 1. ``exchange_balance`` of one gas step in the tsuji-jet box (walls, inflow, outlet) with
    random particles and a random gas state: the drag the gas lost on the faces it solves plus
@@ -18,6 +18,8 @@
 """
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
@@ -25,13 +27,12 @@ import fluidem as fd
 from fluidem.case import validate_case
 from fluidem.coupling.drag import drag_laws
 from fluidem.coupling import interpolation as I
-from fluidem.coupling.exchange import GasCoupling
+from fluidem.coupling.exchange import GasCoupling, face_volumes
 from fluidem.gas.solver import GasState
 from fluidem.gas import _solver_kernels as SK
 from fluidem.simulation import Simulation
 
-from test_coupling_kernels import MAPPINGS, random_gas, random_particles
-from types import SimpleNamespace
+from _helpers.coupling import MAPPINGS, random_gas, random_particles
 
 NX, NY, DX = 6, 4, 0.01
 D, RHO_P = 0.004, 2500.0
@@ -229,16 +230,16 @@ def test_a_uniform_bed_gives_every_face_the_same_beta_and_pressure_voidage(perio
     radius, volume = np.full(n, 0.5 * d), np.full(n, np.pi / 6 * d**3)
     vol = dx * dx * depth
     periodic = (periodic_x, False)
-    vu, vv = P.face_volumes((nx, ny), periodic, vol)
+    vu, vv = face_volumes((nx, ny), periodic, vol)
     assert vv[0, 1] == vv[0, ny - 1] == 1.5 * vol and vv[0, 2] == vol
     assert (vu[1, 0] == 1.5 * vol) != periodic_x
     faces = [np.zeros((nx + 1, ny)), np.zeros((nx + 1, ny)), np.zeros((nx, ny + 1)), np.zeros((nx, ny + 1))]
     coeff = [np.zeros((nx + 1, ny)), np.zeros((nx + 1, ny)), np.zeros((nx, ny + 1)), np.zeros((nx, ny + 1))]
     eu, ev = np.zeros((nx + 1, ny)), np.zeros((nx, ny + 1))
     kp = np.zeros(n)
-    code = drag_laws.get("gidaspow")().code
+    law = drag_laws.get("gidaspow")().pack()
     vel = np.zeros((n, 3))
-    bad = P.deposit(code, pos, vel, radius, volume, np.full((nx + 1, ny), 0.3), np.full((nx, ny + 1), 0.5),
+    bad = P.deposit(law, pos, vel, radius, volume, np.full((nx + 1, ny), 0.3), np.full((nx, ny + 1), 0.5),
                     np.full((nx, ny), 0.6), np.full((nx, ny), 1.2), 1.8e-5, dx, dx, 0.3, *periodic, kp, *faces,
                     np.zeros((nx, ny)), vol, vu, vv, coeff[0], coeff[1], coeff[2], coeff[3], True, eu, ev, False)
     assert bad == 0

@@ -14,7 +14,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fluidem.particles._neighbours_kernels import brute_force_pairs, build_pairs, carry_history, contacts_first
+from fluidem.particles._neighbours_kernels import build_pairs, carry_history, contacts_first
+
+from _helpers.neighbours import brute_force_pairs, random_packing
 
 
 def csr_pairs(row_start, partner):
@@ -27,22 +29,6 @@ def csr_pairs(row_start, partner):
 
 def brute_pairs(pos, radius, skin):
     return {(int(i), int(j)) for i, j in brute_force_pairs(pos, radius, skin)}
-
-
-def random_packing(seed, n, dim2, solid_fraction=0.3, spread=(0.5, 1.5)):
-    """Random (overlapping allowed) polydisperse positions at a given nominal solid fraction.
-
-    Radii are uniform in spread × 1 mm; the box side is chosen for the solid fraction.
-    """
-    rng = np.random.default_rng(seed)
-    radius = 1e-3 * rng.uniform(*spread, n)
-    if dim2:
-        side = np.sqrt(np.sum(np.pi * radius**2) / solid_fraction)
-        pos = np.column_stack([rng.uniform(0, side, (n, 2)), np.full(n, 0.25e-3)])  # one z, as 2D cases have
-    else:
-        side = np.cbrt(np.sum(4 / 3 * np.pi * radius**3) / solid_fraction)
-        pos = rng.uniform(0, side, (n, 3)) - 0.3 * side  # a box not at the origin
-    return pos, radius
 
 
 def check_lists(pos, radius, skin, dim2):

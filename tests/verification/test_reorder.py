@@ -18,7 +18,8 @@ from fluidem.case import validate_case
 from fluidem.particles import _neighbours_kernels as NK
 from fluidem.particles.softsphere import SoftSphereEngine
 from fluidem.simulation import Simulation
-from test_neighbours import random_packing
+
+from _helpers.neighbours import random_packing
 
 
 def by_id(state, name):

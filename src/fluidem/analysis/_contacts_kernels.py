@@ -1,6 +1,8 @@
-"""Compiled contact statistics over the Verlet list (read-only)."""
+"""Compiled contact statistics (read-only): contacts over the Verlet list, forces of the particles on the walls."""
 import numpy as np
 from numba import njit
+
+from ..particles._softsphere_kernels import wall_contact, walls_now
 
 
 @njit(cache=True, error_model="numpy")
@@ -25,3 +27,21 @@ def contact_counts(pos, radius, row_start, partner):
                 if ov > worst:
                     worst = ov
     return per, total, worst
+
+
+@njit(cache=True, error_model="numpy")
+def wall_totals(pos, vel, omega, radius, mass, species, pw, motion, point0, normal, wall_hist, t, dt):
+    """Force of the particles on each wall plane at time ``t`` [s], (W, 3) [N]: minus the sum of the
+    wall contact forces (``particles._softsphere_kernels.wall_contact``) on the particles touching it."""
+    nw = normal.shape[0]
+    out = np.zeros((nw, 3))
+    now = walls_now(motion, point0, t)
+    for i in range(pos.shape[0]):
+        for w in range(nw):
+            ov, fx, fy, fz, _, _, _ = wall_contact(i, w, pos, vel, omega, radius, mass, species, pw, now,
+                                                   normal, wall_hist, dt, False)
+            if ov > 0.0:
+                out[w, 0] -= fx  # force of the particles on the wall
+                out[w, 1] -= fy
+                out[w, 2] -= fz
+    return out

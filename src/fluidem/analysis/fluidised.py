@@ -14,7 +14,7 @@ Definitions (Sun 2007, §4):
   inlet) between cell-centre rows.
 - pressure 20 cm above the jet (Hoomans 1996 Figs 11/13): the gauge pressure (relative to
   the reference pressure) at mid-width, bilinear between cell centres.
-- bubble (Hoomans 1996 §5.3, issue 5): the largest 4-connected region of cells with
+- bubble (Hoomans 1996 §5.3): the largest 4-connected region of cells with
   ε > 0.8 not connected to the freeboard, at least 3 cells; ``bubble_detected`` in the
   summary says whether one formed at any probe time.
 - mean particle height (Fig 9): the arithmetic mean of the particle centres' heights
@@ -22,7 +22,7 @@ Definitions (Sun 2007, §4):
 
 Time averages for ``summary.json`` are taken from ``probes.csv`` over 5–10 s (Sun's
 window) when the run reaches 10 s, else over the second half of the run; the window
-used is reported.
+used is reported. The spectrum of the pressure signal is ``analysis.spectrum.power_spectrum``.
 """
 from __future__ import annotations
 
@@ -31,7 +31,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io.probes_csv import read_probes
 from ._contacts_kernels import contact_counts
+from .spectrum import MIN_SAMPLES as SPECTRUM_MIN_SAMPLES, dominant_frequency, spectral_peaks
 
 PRESSURE_PROBE_HEIGHT = 0.20  # [m] above the inlet, Sun 2007 Fig 3 / Hoomans 1996 §5.3
 SUN_WINDOW = (5.0, 10.0)  # [s] Sun 2007 time averages
@@ -79,7 +81,7 @@ def pressure_at_heights(grid, p: np.ndarray, heights) -> np.ndarray:
 
     The extrapolation to the inflow is the coupled model's own inlet pressure: the half cell below
     the first centre belongs to the first interior face's momentum control volume
-    (``coupling.boundary_faces = "fold"``, ``_paired_kernels.face_volumes``), across which the
+    (``coupling.boundary_faces = "fold"``, ``coupling.exchange.face_volumes``), across which the
     pressure falls with that face's gradient."""
     yc = grid.y_centres
     prof = np.asarray(p, float).mean(axis=0)
@@ -110,31 +112,34 @@ def pressure_at(grid, p: np.ndarray, x: float, y: float) -> float:
     return float((1 - a) * (1 - b) * p[i, j] + a * (1 - b) * p[i1, j] + (1 - a) * b * p[i, j1] + a * b * p[i1, j1])
 
 
-BUBBLE_VOIDAGE = 0.8  # a bubble cell has ε above this (issue 5; Hoomans 1996 Figs 10/12 by eye)
+BUBBLE_VOIDAGE = 0.8  # a bubble cell has ε above this (Hoomans 1996 Figs 10/12 by eye)
 BUBBLE_MIN_CELLS = 3  # smaller void regions (the jet channel at an orifice) are not bubbles
+
+
+def _bubbles(voidage: np.ndarray, threshold: float) -> tuple[np.ndarray, np.ndarray]:
+    """(labels (nx, ny) of the 4-connected regions of cells with ε > ``threshold``, cells per label with
+    0 for every label that is no bubble: the background, a region open to the top row (the freeboard)
+    or one of fewer than ``BUBBLE_MIN_CELLS`` cells)."""
+    from scipy import ndimage
+
+    labels, n = ndimage.label(np.asarray(voidage) > threshold)
+    sizes = np.bincount(labels.ravel(), minlength=n + 1)
+    sizes[0] = 0
+    sizes[np.unique(labels[:, -1])] = 0
+    sizes[sizes < BUBBLE_MIN_CELLS] = 0
+    return labels, sizes
 
 
 def bubble_area(grid, voidage: np.ndarray, threshold: float = BUBBLE_VOIDAGE) -> float:
     """Area [m²] of the largest bubble: a 4-connected region of cells with ε > ``threshold`` that is
     not connected to the top row (the freeboard), so a void enclosed by particles, slugs included.
     Regions of fewer than ``BUBBLE_MIN_CELLS`` cells count as no bubble (0)."""
-    from scipy import ndimage
-
-    void = np.asarray(voidage) > threshold
-    labels, n = ndimage.label(void)
-    if n == 0:
-        return 0.0
-    free = set(np.unique(labels[:, -1])) - {0}
-    sizes = np.bincount(labels.ravel(), minlength=n + 1)
-    sizes[0] = 0
-    for k in free:
-        sizes[k] = 0
-    best = int(sizes.max())
-    return float(best * grid.dx * grid.dy) if best >= BUBBLE_MIN_CELLS else 0.0
+    _, sizes = _bubbles(voidage, threshold)
+    return float(sizes.max() * grid.dx * grid.dy)
 
 
-# A slug is a bubble as wide as the column (issue 5: "touches or nearly touches both side
-# walls"). The usual rule of thumb has bubbles turn into slugs once they grow past about two
+# A slug is a bubble as wide as the column: one that touches or nearly touches both side
+# walls. The usual rule of thumb has bubbles turn into slugs once they grow past about two
 # thirds of the column width; 0.8 is stricter, so a large bubble in the middle of the bed is
 # not called a slug, while it leaves room for the particles that slide down the walls past a
 # slug, which keep a wall cell below ε = 0.8. On Hoomans' grid (15 cells of 10 mm) that is 12
@@ -149,19 +154,12 @@ def bubble_regions(grid, voidage: np.ndarray, threshold: float = BUBBLE_VOIDAGE)
     top row (the freeboard) and of at least ``BUBBLE_MIN_CELLS`` cells; the largest mask's
     area is ``bubble_area``.
     """
-    from scipy import ndimage
-
     eps = np.asarray(voidage)
     if eps.shape != tuple(grid.shape):
         raise ValueError(f"voidage has shape {eps.shape}; the grid's cells are {tuple(grid.shape)}")
-    labels, n = ndimage.label(eps > threshold)
-    if n == 0:
-        return []
-    free = set(np.unique(labels[:, -1])) - {0}
-    sizes = np.bincount(labels.ravel(), minlength=n + 1)
-    keep = [k for k in range(1, n + 1) if k not in free and sizes[k] >= BUBBLE_MIN_CELLS]
-    keep.sort(key=lambda k: -sizes[k])
-    return [labels == k for k in keep]
+    labels, sizes = _bubbles(eps, threshold)
+    keep = np.flatnonzero(sizes)
+    return [labels == k for k in keep[np.argsort(-sizes[keep], kind="stable")]]
 
 
 def bubble_width_fraction(grid, voidage: np.ndarray, threshold: float = BUBBLE_VOIDAGE) -> float:
@@ -173,9 +171,9 @@ def bubble_width_fraction(grid, voidage: np.ndarray, threshold: float = BUBBLE_V
     """
     best = 0
     for mask in bubble_regions(grid, voidage, threshold):
-        for j in np.flatnonzero(mask.any(axis=0)):
-            cols = np.flatnonzero(mask[:, j])
-            best = max(best, int(cols[-1] - cols[0] + 1))
+        first = np.argmax(mask, axis=0)  # leftmost and rightmost cell of each row
+        last = mask.shape[0] - 1 - np.argmax(mask[::-1], axis=0)
+        best = max(best, int(np.max(np.where(mask.any(axis=0), last - first + 1, 0))))
     return best / grid.nx
 
 
@@ -243,64 +241,13 @@ def cell_force_maps(grid, position, mass, contact, drag, gravity) -> dict[str, n
     return {"contact_force": mc, "drag_force": md, "force_ratio": ratio, "particles": count}
 
 
-def averaging_window(t_end: float, window=SUN_WINDOW) -> tuple[float, float]:
-    """Sun's 5–10 s window when the run reaches its end, else the second half of the run."""
-    if t_end >= window[1] - 1e-9:
+def averaging_window(t_end: float, window=SUN_WINDOW, t_start: float = 0.0) -> tuple[float, float]:
+    """(t0, t1) [s] of the time averages over a record from ``t_start`` to ``t_end`` [s]: Sun's 5–10 s
+    ``window`` when the record covers it, else the record's second half."""
+    tol = 1e-9 * max(abs(t_end), 1.0)
+    if t_start <= window[0] + tol and t_end >= window[1] - tol:
         return float(window[0]), float(window[1])
-    return 0.5 * t_end, t_end
-
-
-def _uniform(t, signal, least: int):
-    """(sample spacing, the finite samples resampled on a uniform grid with the mean removed), or None when
-    fewer than ``least`` are finite (probe times are uniform up to round-off)."""
-    t, s = np.asarray(t, float), np.asarray(signal, float)
-    ok = np.isfinite(s)
-    t, s = t[ok], s[ok]
-    if s.size < least:
-        return None
-    dt = float(np.median(np.diff(t)))
-    if dt <= 0:
-        return None
-    su = np.interp(np.arange(t[0], t[-1] + 0.5 * dt, dt), t, s)
-    return dt, su - su.mean()
-
-
-def dominant_frequency(t: np.ndarray, signal: np.ndarray) -> float:
-    """Frequency [Hz] of the largest peak of the power spectrum (mean removed); NaN if too short."""
-    u = _uniform(t, signal, 8)
-    if u is None:
-        return math.nan
-    dt, su = u
-    spec = np.abs(np.fft.rfft(su)) ** 2
-    freq = np.fft.rfftfreq(su.size, dt)
-    if spec.size < 2:
-        return math.nan
-    k = 1 + int(np.argmax(spec[1:]))
-    return float(freq[k])
-
-
-def spectral_peaks(t: np.ndarray, signal: np.ndarray, count: int = 3) -> tuple[list[float], list[float]]:
-    """The ``count`` highest peaks of the signal's Welch spectrum: (frequencies [Hz], heights relative to the
-    highest), highest first; empty lists if the signal is too short.
-
-    Welch's estimate (``scipy.signal.welch``: Hann segments of half the record or 256 samples, whichever is
-    shorter, overlapping by half) averages the periodograms of the segments, so a peak that stands out in
-    one record by chance does not. A fluidised bed's pressure signal often has two modes of like power (the
-    tsuji-jet bed: near 2 and 6 Hz), and which one ``dominant_frequency`` picks then changes from record to
-    record; the second height says how close the call was.
-    """
-    from scipy.signal import find_peaks, welch
-
-    u = _uniform(t, signal, 16)
-    if u is None:
-        return [], []
-    dt, su = u
-    freq, power = welch(su, fs=1.0 / dt, nperseg=min(256, su.size // 2))
-    where, _ = find_peaks(np.concatenate(([-np.inf], power[1:], [-np.inf])))  # local maxima, the mean's bin left out
-    if where.size == 0 or power.max() <= 0.0:
-        return [], []
-    top = where[np.argsort(power[where])[::-1][:count]]
-    return [float(freq[k]) for k in top], [float(power[k] / power[top[0]]) for k in top]
+    return t_start + 0.5 * (t_end - t_start), t_end
 
 
 AVERAGED = {  # probes.csv column → summary key of its time average
@@ -314,33 +261,31 @@ AVERAGED = {  # probes.csv column → summary key of its time average
 
 
 def time_averages(probes_csv: str | Path, t_end: float) -> dict:
-    """Summary entries: time averages of the bed probes, the pressure signal's dominant frequency (periodogram)
-    and the highest peaks of its Welch spectrum with their relative heights."""
+    """Summary entries: time averages of the bed probes over ``averaging_window``, and the spectrum of the
+    20 cm pressure drop there (``analysis.spectrum``): the frequency of its highest peak and its highest
+    peaks with their relative heights, when the window holds enough samples for a spectrum."""
     path = Path(probes_csv)
     if not path.exists():
         return {}
-    import csv
-
-    with open(path, newline="") as f:
-        rows = list(csv.DictReader(f))
-    if not rows:
+    cols = read_probes(path)
+    if "time_s" not in cols or cols["time_s"].size == 0:
         return {}
     a, b = averaging_window(t_end)
-    t = np.array([float(r["time_s"]) for r in rows])
+    t = cols["time_s"]
     sel = (t >= a - 1e-9) & (t <= b + 1e-9)
     out: dict = {"averages_window_s": [a, b], "averages_samples": int(sel.sum())}
     for col, key in AVERAGED.items():
-        if col not in rows[0] or not sel.any():
+        if col not in cols or not sel.any():
             continue
-        vals = np.array([float(r[col]) if r[col] not in ("", "nan") else math.nan for r in rows])[sel]
+        vals = cols[col][sel]
         vals = vals[np.isfinite(vals)]
         out[key] = float(vals.mean()) if vals.size else None
-    if "bubble_area_m2" in rows[0]:  # over the whole run: does a bubble ever form?
-        areas = np.array([float(r["bubble_area_m2"]) for r in rows])
+    if "bubble_area_m2" in cols:  # over the whole run: does a bubble ever form?
+        areas = cols["bubble_area_m2"]
         out["bubble_max_area_m2"] = float(areas.max())
         out["bubble_detected"] = bool(areas.max() > 0.0)
-    if "pressure_drop_20cm_Pa" in rows[0] and sel.sum() >= 8:
-        s = np.array([float(r["pressure_drop_20cm_Pa"]) for r in rows])[sel]
+    if "pressure_drop_20cm_Pa" in cols and sel.sum() >= SPECTRUM_MIN_SAMPLES:
+        s = cols["pressure_drop_20cm_Pa"][sel]
         f = dominant_frequency(t[sel], s)
         out["pressure_20cm_dominant_frequency_Hz"] = f if math.isfinite(f) else None
         peaks, heights = spectral_peaks(t[sel], s)

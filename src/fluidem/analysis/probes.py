@@ -1,36 +1,20 @@
-"""Scalar probes of a particle system: energies, contacts, wall forces, packing."""
+"""Scalar probes of a particle system: energies, contacts, wall forces, packing.
+
+Orchestration only: the loops over particles and contacts are the kernels of ``_contacts_kernels``.
+"""
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
-from ..particles._softsphere_kernels import wall_contact, walls_now
-from ._contacts_kernels import contact_counts
+from ..particles._softsphere_kernels import walls_now
+from ..particles.engine import ParticleEngine
+from ._contacts_kernels import contact_counts, wall_totals
 
 
 def energies(engine) -> dict[str, float]:
-    """Kinetic, rotational and potential energy [J]; potential relative to the origin, −m g·x."""
-    st = engine.state
-    ke = 0.5 * float(np.sum(st.mass * np.einsum("ij,ij->i", st.velocity, st.velocity)))
-    re = 0.5 * float(np.sum(st.inertia * np.einsum("ij,ij->i", st.omega, st.omega)))
-    pe = -float(np.sum(st.mass * (st.position @ engine.gravity)))
-    return {"kinetic_J": ke, "rotational_J": re, "potential_J": pe}
-
-
-def is_hard_sphere(engine) -> bool:
-    """True for the event-driven engine (collisions are instantaneous, energy is booked as dissipated)."""
-    return hasattr(engine, "dissipated_normal_J")
-
-
-def collisions(engine) -> dict[str, float]:
-    """Hard-sphere energy housekeeping (Hoomans 1996 eq. 51): dissipated energy (eqs 23, 27, 29),
-    the total E_kin + E_pot + E_rot + E_dsp, and the collision counts."""
-    e = energies(engine)
-    diss_n, diss_t = float(engine.dissipated_normal_J), float(engine.dissipated_tangential_J)
-    return {"dissipated_normal_J": diss_n, "dissipated_tangential_J": diss_t,
-            "total_energy_J": e["kinetic_J"] + e["rotational_J"] + e["potential_J"] + diss_n + diss_t,
-            "collisions": int(engine.collisions), "wall_collisions": int(engine.wall_collisions),
-            "remedy_count": int(getattr(engine, "remedy_count", 0))}
+    """Kinetic, rotational and potential energy [J]; potential relative to the origin, −m g·x
+    (``ParticleEngine.energies``, without an engine's further terms)."""
+    return ParticleEngine.energies(engine)
 
 
 def contacts(engine) -> dict[str, float]:
@@ -53,26 +37,10 @@ def wall_positions(engine):
     return walls_now(engine.wall_motion, engine.wall_point0, engine.time)[:, :3], engine.wall_normal
 
 
-@njit(cache=True, error_model="numpy")
-def _wall_totals(pos, vel, omega, radius, mass, species, pw, motion, point0, normal, wall_hist, t, dt):
-    nw = normal.shape[0]
-    out = np.zeros((nw, 3))
-    now = walls_now(motion, point0, t)
-    for i in range(pos.shape[0]):
-        for w in range(nw):
-            ov, fx, fy, fz, _, _, _ = wall_contact(i, w, pos, vel, omega, radius, mass, species, pw, now,
-                                                   normal, wall_hist, dt, False)
-            if ov > 0.0:
-                out[w, 0] -= fx  # force of the particles on the wall
-                out[w, 1] -= fy
-                out[w, 2] -= fz
-    return out
-
-
 def wall_forces(engine) -> dict[str, np.ndarray]:
     """Force exerted by the particles on each wall plane [N], by plane name."""
     st = engine.state
-    tot = _wall_totals(st.position, st.velocity, st.omega, st.radius, st.mass, st.species, engine.pw,
+    tot = wall_totals(st.position, st.velocity, st.omega, st.radius, st.mass, st.species, engine.pw,
                        engine.wall_motion, engine.wall_point0, engine.wall_normal, engine.wall_hist,
                        engine.time, engine.dt)
     return {name: tot[k] for k, name in enumerate(engine.walls.names)}

@@ -4,7 +4,7 @@
 one snapshot of the gas state to ``gas.h5`` and then its grid to ``gas.xdmf`` (one write,
 ``io/xdmf.py``), so the index lists only snapshots that were written completely and is valid
 between snapshots. A run without gas (``sim.gas is None``) writes nothing. ``read_gas_fields``
-reads a run's file back as NumPy arrays stacked over time.
+reads a run's file back as NumPy arrays stacked over time, ``read_gas_grid`` its grid.
 
 Layout of ``gas.h5`` (all float64, SI units)::
 
@@ -139,7 +139,7 @@ class GasFieldWriter:
             g = grp.create_group(key)
             self._next_key += 1
             g.attrs["time"] = float(sim.time)
-            g.attrs["step"] = int(sim.step)
+            g.attrs["step"] = int(sim.steps)
             for name, value in fields.items():
                 d = g.create_dataset(name, data=np.ascontiguousarray(value.T))
                 d.attrs["units"] = UNITS[name]
@@ -254,6 +254,30 @@ def xdmf_text(h5name: str, index: list[tuple[str, float, list[str]]], nx: int, n
     return document("gas", [grid_text(h5name, key, t, names, nx, ny) for key, t, names in index])
 
 
+def _gas_file(run_dir: str | Path) -> Path:
+    """The ``gas.h5`` of a run directory (or ``run_dir`` itself when it is the file); FileNotFoundError
+    without one."""
+    path = Path(run_dir)
+    if path.is_dir():
+        path = path / GAS_FILE
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: no gas fields (runs with a gas phase write {GAS_FILE})")
+    return path
+
+
+def read_gas_grid(run_dir: str | Path) -> dict[str, float]:
+    """The grid of a run's ``gas.h5`` from its file attributes: ``nx``, ``ny`` (int), ``dx``, ``dy`` [m] and
+    ``depth`` [m] (1.0 when the file does not give it).
+
+    ``run_dir`` is a run directory or the file. Raises ``FileNotFoundError`` without a file, ``OSError``
+    when HDF5 cannot open it and ``KeyError`` when it lacks an attribute.
+    """
+    with h5py.File(_gas_file(run_dir), "r") as f:
+        a = f.attrs
+        return {"nx": int(a["nx"]), "ny": int(a["ny"]), "dx": float(a["dx"]), "dy": float(a["dy"]),
+                "depth": float(a.get("depth", 1.0))}
+
+
 def read_gas_fields(run_dir: str | Path, fields=None) -> dict[str, np.ndarray]:
     """The gas fields of a run, stacked over time.
 
@@ -275,11 +299,7 @@ def read_gas_fields(run_dir: str | Path, fields=None) -> dict[str, np.ndarray]:
     >>> mean_solids = g["solids_fraction"][g["time"] >= 5.0].mean(axis=0)   # (nx, ny)
     >>> import pandas as pd; pd.Series(g["p"][:, 7, 10], index=g["time"])    # one cell's pressure
     """
-    path = Path(run_dir)
-    if path.is_dir():
-        path = path / GAS_FILE
-    if not path.is_file():
-        raise FileNotFoundError(f"{path}: no gas fields (runs with a gas phase write {GAS_FILE})")
+    path = _gas_file(run_dir)
     with h5py.File(path, "r") as f:
         if "grid" not in f:
             raise KeyError(f"{path} has no /grid group; it is not a fluidem gas-field file")

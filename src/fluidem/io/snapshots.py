@@ -22,14 +22,6 @@ from .xdmf import XdmfIndex, document
 SNAPSHOT_FILE = "particles.h5"
 SNAPSHOT_INDEX = "particles.xdmf"
 
-FIELDS = {  # name: (xdmf attribute type, components)
-    "velocity": ("Vector", 3),
-    "omega": ("Vector", 3),
-    "diameter": ("Scalar", 1),
-    "species": ("Scalar", 1),
-    "id": ("Scalar", 1),
-}
-
 
 class ParticleWriter:
     """Observer writing particle snapshots; ``schedule`` decides when."""
@@ -126,11 +118,6 @@ def _field_layout(group) -> dict[str, tuple[str, int, str, int]]:
     return out
 
 
-def _default_fields():
-    return {k: (kind, comp, "Int" if k in ("species", "id") else "Float", 4 if k == "species" else 8)
-            for k, (kind, comp) in FIELDS.items()}
-
-
 def grid_text(h5name: str, key: str, t: float, n: int, fields) -> str:
     """The XDMF ``<Grid>`` element of one snapshot (``xdmf_text`` joins them)."""
     attrs = []
@@ -153,9 +140,9 @@ def grid_text(h5name: str, key: str, t: float, n: int, fields) -> str:
     )
 
 
-def xdmf_text(h5name: str, times: list[tuple[str, float]], n: int, fields=None) -> str:
-    """The whole ``particles.xdmf``: one grid of ``n`` particles with ``fields`` per (key, time) in ``times``."""
-    fields = _default_fields() if fields is None else fields
+def xdmf_text(h5name: str, times: list[tuple[str, float]], n: int, fields) -> str:
+    """The whole ``particles.xdmf``: one grid of ``n`` particles with ``fields`` (``_field_layout``; None
+    when ``times`` is empty) per (key, time) in ``times``."""
     return document("particles", [grid_text(h5name, key, t, n, fields) for key, t in times])
 
 

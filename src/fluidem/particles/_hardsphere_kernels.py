@@ -53,7 +53,7 @@ from numba import njit
 
 from ._neighbours_kernels import _csr_of_pairs, build_pairs
 from .contact.base import SLOT_FRICTION
-from .contact.hard_sphere import NO_COLLISION, SLIDING, SLOT_COLLAPSE_TIME, SLOT_RESTITUTION, STICKING, impulse
+from .contact.hard_sphere import NO_COLLISION, SLOT_COLLAPSE_TIME, SLOT_RESTITUTION, STICKING, impulse
 
 # predicted-event codes in ev[:, 0]: >= 0 partner particle, then:
 NO_EVENT = -1

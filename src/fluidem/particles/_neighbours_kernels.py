@@ -183,7 +183,8 @@ def _scan(xi, yi, zi, ai, kh, a, b, skin, xs, key, out, w):
     A pair is written as owner << 32 | partner, at w, which then advances by the 0/1 of
     "within the cut-off": no branch on that coin toss (the former fill measured mispredicted
     branches there as most of its cost, 3.5x in 2D). The distance and cut-off are the
-    expressions of ``brute_force_pairs``, to the same rounding whichever end is i.
+    expressions of the O(N²) search the tests compare with (``tests/_helpers/neighbours.py``), to the same
+    rounding whichever end is i.
     """
     for m in range(a, b):
         um = U(m)
@@ -530,19 +531,3 @@ def carry_history(old_start, old_partner, old_hist, new_start, new_partner):
                 hist[p, 1] = sign * old_hist[q, 1]
                 hist[p, 2] = sign * old_hist[q, 2]
     return hist
-
-
-@njit(cache=True, error_model="numpy")
-def brute_force_pairs(pos, radius, cutoff_extra):
-    """All pairs i < j with |r_ij| < a_i + a_j + cutoff_extra, O(N²) (for tests)."""
-    n = pos.shape[0]
-    out = []
-    for i in range(n):
-        for j in range(i + 1, n):
-            r2 = 0.0
-            for d in range(3):
-                r2 += (pos[i, d] - pos[j, d]) ** 2
-            cut = radius[i] + radius[j] + cutoff_extra
-            if r2 < cut * cut:
-                out.append((i, j))
-    return out

@@ -66,6 +66,14 @@ class ParticleEngine:
         """Continue from ``checkpoint_arrays()``/``checkpoint_scalars()`` of an engine of the same case."""
         raise NotImplementedError
 
+    def energies(self) -> dict[str, float]:
+        """Kinetic, rotational and potential energy [J]; potential relative to the origin, −Σ m g·x."""
+        st = self.state
+        ke = 0.5 * float(np.sum(st.mass * np.einsum("ij,ij->i", st.velocity, st.velocity)))
+        re = 0.5 * float(np.sum(st.inertia * np.einsum("ij,ij->i", st.omega, st.omega)))
+        pe = -float(np.sum(st.mass * (st.position @ self.gravity)))
+        return {"kinetic_J": ke, "rotational_J": re, "potential_J": pe}
+
     def bookkeeping(self) -> dict[str, float]:
         """Engine-specific running totals for the probes (energy dissipated in collisions, collision counts);
         empty where the engine keeps none."""

@@ -236,13 +236,9 @@ class HardSphereEngine(ParticleEngine):
         Their sum is Hoomans' E_tot (1996 eq. 51), constant up to the O(DT) error of eqs 32–34
         when no gas acts.
         """
-        st = self.state
-        ke = 0.5 * float(np.sum(st.mass * np.einsum("ij,ij->i", st.velocity, st.velocity)))
-        re = 0.5 * float(np.sum(st.inertia * np.einsum("ij,ij->i", st.omega, st.omega)))
-        pe = -float(np.sum(st.mass * (st.position @ self.gravity)))
+        e = super().energies()
         diss = self.dissipated_normal_J + self.dissipated_tangential_J
-        return {"kinetic_J": ke, "rotational_J": re, "potential_J": pe, "dissipated_J": diss,
-                "total_J": ke + re + pe + diss}
+        return {**e, "dissipated_J": diss, "total_J": e["kinetic_J"] + e["rotational_J"] + e["potential_J"] + diss}
 
     def bookkeeping(self) -> dict[str, float]:
         """Hoomans 1996 eq. 51's energy housekeeping: dissipated energy (eqs 23, 27, 29), the total

@@ -7,10 +7,10 @@ What ``fluidem plot | animate | compare | report`` call; usable from Python too:
     plot_run(run, "runs/pour/figures", PlotOptions(color="speed"))
     write_report(run)                                # runs/pour/report.html
 
-Modules: ``run`` (reading a run directory), ``style`` (one look, units in labels),
-``figures`` (the registry of figures: each says what it needs and draws itself),
-``animate`` (MP4), ``compare`` (several runs), ``report`` (HTML), ``published``
-(published numbers of the seed cases). Needs the ``plot`` extra (matplotlib);
+Modules: ``run`` (a run directory, read through ``fluidem.io``), ``style`` (one look, units in
+labels), ``figures`` (the registry of figures, one module per family: each says what it needs
+and draws itself), ``animate`` (MP4), ``compare`` (several runs), ``report`` (HTML),
+``published`` (published numbers of the seed cases). Needs the ``plot`` extra (matplotlib);
 ``animate`` also needs the ``animate`` extra (imageio, imageio-ffmpeg). Matplotlib is
 imported only when a figure is drawn, and pyplot never.
 """

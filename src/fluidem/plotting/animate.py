@@ -15,7 +15,7 @@ import numpy as np
 
 from ..errors import CaseError
 from . import style
-from .figures import Colourer, draw_particles, setup_particle_axes, speed_max, view_of, _time_title
+from .figures import Colourer, draw_particles, setup_particle_axes, speed_max, time_title, view_of
 from .run import RunData, Unavailable
 
 BLOCK = 16  # H.264 macro block: frame sizes are multiples of this
@@ -116,7 +116,7 @@ def _write_frames(iio, run: RunData, path: Path, color: str, fps: float, height_
                 if coll is not None:
                     coll.remove()
                 coll = draw_particles(ax, view, snap, colourer.colours(snap))
-                ax.set_title(_time_title(snap["time"]))
+                ax.set_title(time_title(snap["time"]))
                 fig.canvas.draw()
                 if k == 0:
                     fig.set_layout_engine("none")  # freeze the layout: every frame the same

@@ -5,13 +5,14 @@ raises ``CaseError`` otherwise. Everything else is optional: a quantity the run 
 (no ``probes.csv``, no ``particles.h5``, no ``gas.h5``, a column that is not there) is
 reported by ``RunData.lacks_*`` as a one-line reason, so figures skip with a note instead
 of failing.
-Readers only read; nothing in the run directory is changed.
+The files are read by the readers of ``fluidem.io`` (``summary.read_summary``,
+``probes_csv.read_probes``, ``snapshots.snapshot_index`` / ``snapshot_fields`` / ``read_snapshot`` /
+``iter_snapshots``, ``gas_fields.read_gas_fields`` / ``read_gas_grid``); nothing in the run directory
+is changed.
 """
 from __future__ import annotations
 
 import csv
-import json
-import math
 import tomllib
 from functools import cached_property
 from pathlib import Path
@@ -19,16 +20,23 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import CaseError
+from ..io import snapshots as particles_h5
+from ..io.gas_fields import GAS_FILE, read_gas_fields, read_gas_grid
+from ..io.probes_csv import PROBES_FILE, read_probes
+from ..io.snapshots import SNAPSHOT_FILE
+from ..io.summary import read_summary
 
 CASE_FILE = "case.toml"
-SUMMARY_FILE = "summary.json"
-PROBES_FILE = "probes.csv"
-SNAPSHOT_FILE = "particles.h5"
-GAS_FILE = "gas.h5"
 
 
 class Unavailable(Exception):
     """A quantity the run does not have (or cannot be read); the message is a one-line reason."""
+
+
+def _reason(err: Exception) -> str:
+    """The first line of a reader's error (a KeyError's message without the quotes ``str`` adds)."""
+    text = str(err.args[0]) if isinstance(err, KeyError) and err.args else str(err)
+    return text.splitlines()[0] if text else type(err).__name__
 
 
 class RunData:
@@ -121,10 +129,9 @@ class RunData:
     def summary(self) -> dict | None:
         """``summary.json`` as a dict, or None when missing or unreadable."""
         try:
-            data = json.loads((self.path / SUMMARY_FILE).read_text())
+            return read_summary(self.path)
         except (OSError, ValueError):
             return None
-        return data if isinstance(data, dict) else None
 
     # ------------------------------------------------------------ probes
     @cached_property
@@ -133,22 +140,11 @@ class RunData:
         if not path.is_file():
             return None, f"the run has no {PROBES_FILE}"
         try:
-            with open(path, newline="") as f:
-                rows = [r for r in csv.reader(f) if r]
+            cols = read_probes(path)
         except (OSError, UnicodeDecodeError, csv.Error) as err:
             return None, f"{PROBES_FILE} cannot be read: {err}"
-        if not rows:
+        if not cols:
             return None, f"{PROBES_FILE} is empty"
-        header, body = rows[0], rows[1:]
-        cols: dict[str, np.ndarray] = {}
-        for k, name in enumerate(header):
-            vals = np.full(len(body), math.nan)
-            for i, r in enumerate(body):
-                try:
-                    vals[i] = float(r[k])
-                except (IndexError, ValueError):
-                    pass
-            cols[name.strip()] = vals
         return cols, None
 
     @property
@@ -190,15 +186,9 @@ class RunData:
         if not path.is_file():
             return None, f"the run has no particle snapshots ({SNAPSHOT_FILE})"
         try:
-            import h5py
-
-            with h5py.File(path, "r") as f:
-                grp = f.get("snapshots")
-                if grp is None:
-                    return None, f"{SNAPSHOT_FILE} has no /snapshots group"
-                index = [(k, float(grp[k].attrs["time"])) for k in sorted(grp)]
+            index = particles_h5.snapshot_index(path)
         except (OSError, KeyError, ValueError) as err:
-            return None, f"{SNAPSHOT_FILE} cannot be read: {err}"
+            return None, f"{SNAPSHOT_FILE} cannot be read: {_reason(err)}"
         if not index:
             return None, f"{SNAPSHOT_FILE} holds no snapshots"
         return index, None
@@ -213,11 +203,8 @@ class RunData:
         if not index:
             return ()
         try:
-            import h5py
-
-            with h5py.File(self.path / SNAPSHOT_FILE, "r") as f:
-                return tuple(f["snapshots"][index[0][0]])
-        except (OSError, KeyError, ValueError):
+            return particles_h5.snapshot_fields(self.path, 0)
+        except (OSError, KeyError, ValueError, IndexError):
             return ()
 
     def lacks_snapshot_fields(self, *fields: str) -> str | None:
@@ -249,13 +236,9 @@ class RunData:
             raise Unavailable(why)
         key, t = index[k]
         try:
-            import h5py
-
-            with h5py.File(self.path / SNAPSHOT_FILE, "r") as f:
-                g = f["snapshots"][key]
-                out = {name: np.asarray(g[name]) for name in g}
-        except (OSError, KeyError, ValueError) as err:
-            raise Unavailable(f"{SNAPSHOT_FILE} snapshot {key} cannot be read: {err}") from None
+            out = particles_h5.read_snapshot(self.path, k)
+        except (OSError, KeyError, ValueError, IndexError) as err:
+            raise Unavailable(f"{SNAPSHOT_FILE} snapshot {key} cannot be read: {_reason(err)}") from None
         if "position" not in out or "diameter" not in out:
             raise Unavailable(f"{SNAPSHOT_FILE} snapshot {key} has no position or diameter")
         n = out["position"].shape[0]
@@ -270,17 +253,10 @@ class RunData:
         index, why = self._snapshot_index
         if index is None:
             raise Unavailable(why)
-        chosen = index if indices is None else [index[k] for k in indices]
         try:
-            import h5py
-
-            with h5py.File(self.path / SNAPSHOT_FILE, "r") as f:
-                grp = f["snapshots"]
-                for key, t in chosen:
-                    g = grp[key]
-                    yield t, {name: np.asarray(g[name]) for name in fields if name in g}
-        except (OSError, KeyError, ValueError) as err:
-            raise Unavailable(f"{SNAPSHOT_FILE} cannot be read: {err}") from None
+            yield from particles_h5.iter_snapshots(self.path, fields, indices)
+        except (OSError, KeyError, ValueError, IndexError) as err:
+            raise Unavailable(f"{SNAPSHOT_FILE} cannot be read: {_reason(err)}") from None
 
     # ------------------------------------------------------------ gas fields
     @property
@@ -295,12 +271,10 @@ class RunData:
             if not self.has_gas_phase:
                 return None, "the run has no gas phase (its case.toml has no [gas] section)"
             return None, f"the run has no gas fields ({GAS_FILE})"
-        from ..io.gas_fields import read_gas_fields
-
         try:
             data = read_gas_fields(path)
         except (OSError, KeyError, ValueError) as err:
-            return None, f"{GAS_FILE} cannot be read: {str(err).splitlines()[0] if str(err) else type(err).__name__}"
+            return None, f"{GAS_FILE} cannot be read: {_reason(err)}"
         if len(data["time"]) == 0:
             return None, f"{GAS_FILE} holds no complete snapshots"
         return data, None
@@ -335,18 +309,12 @@ class RunData:
                                      depth=float(spec.get("depth", 1.0)))
             except (CaseError, TypeError, ValueError):
                 pass
-        path = self.path / GAS_FILE
-        if path.is_file():
-            try:
-                import h5py
-
-                with h5py.File(path, "r") as f:
-                    a = f.attrs
-                    nx, ny = int(a["nx"]), int(a["ny"])
-                    return StaggeredGrid(cells=(nx, ny), size=(nx * float(a["dx"]), ny * float(a["dy"])),
-                                         depth=float(a.get("depth", 1.0)))
-            except (OSError, KeyError, ValueError, TypeError, CaseError):
-                pass
+        try:
+            a = read_gas_grid(self.path)
+            return StaggeredGrid(cells=(a["nx"], a["ny"]), size=(a["nx"] * a["dx"], a["ny"] * a["dy"]),
+                                 depth=a["depth"])
+        except (OSError, KeyError, ValueError, TypeError, CaseError):
+            pass
         if not self.has_gas_phase:
             raise Unavailable("the run has no gas phase (its case.toml has no [gas] section)")
         raise Unavailable(f"neither {CASE_FILE} [gas.grid] nor {GAS_FILE} gives the gas grid")

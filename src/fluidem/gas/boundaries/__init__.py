@@ -26,10 +26,7 @@ from .base import BoundaryCondition, Pulse, Table, Value, boundary_conditions, e
 
 import_submodules(__name__, __path__)
 
-from .inflow import Inflow, Segment  # noqa: E402
-from .outlets import Outflow, PressureOutlet  # noqa: E402
-from .periodic import Periodic  # noqa: E402
-from .walls import FreeSlip, Wall  # noqa: E402
+from .inflow import Segment  # noqa: E402
 
 # the registered conditions by class name (fd.gas.Wall, ...), those of new files included
 globals().update({boundary_conditions.get(n).__name__: boundary_conditions.get(n) for n in boundary_conditions.names()})

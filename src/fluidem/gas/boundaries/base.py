@@ -44,7 +44,10 @@ def problems_of(err: ValidationError, model: type[BaseModel]) -> list[tuple[tupl
         if isinstance(inner, CaseError) and inner.problems:
             out += [(loc + sub, value, msg) for sub, value, msg in inner.problems]
         elif e["type"] == "extra_forbidden" and len(loc) == 1:
-            out.append((loc, e.get("input"), f"unknown key; allowed keys: {', '.join(sorted(model.model_fields))}"))
+            kind = model.model_fields["kind"].default if "kind" in model.model_fields else None
+            what = f"kind {kind!r}" if isinstance(kind, str) else model.__name__
+            out.append((loc, e.get("input"), f"{what} does not take {loc[0]}; allowed keys: "
+                                             f"{', '.join(sorted(model.model_fields))}"))
         else:
             out.append((loc, e.get("input"), e["msg"].removeprefix("Value error, ")))
     return out

@@ -6,7 +6,6 @@ running as root, and skips with a message otherwise.
 """
 from __future__ import annotations
 
-import argparse
 import base64
 import contextlib
 import html
@@ -23,24 +22,14 @@ import pytest
 
 pytest.importorskip("matplotlib")
 
-from fluidem.cli_plot import add_commands  # noqa: E402
 from fluidem.plotting.report import SCRIPT  # noqa: E402
 
-PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+from _helpers.plotting import PNG_SIGNATURE, fluidem  # noqa: E402
+
 URL_ATTRIBUTES = {"src", "href", "srcset", "action", "poster", "data", "xlink:href", "formaction", "background"}
 CHROMIUM_FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
                   "--disable-component-update", "--disable-sync", "--no-first-run",
                   "--enable-logging=stderr", "--v=0", "--dump-dom"]
-
-
-
-
-def fluidem(*argv):
-    parser = argparse.ArgumentParser(prog="fluidem")
-    sub = parser.add_subparsers(dest="command")
-    add_commands(sub)
-    args = parser.parse_args([str(a) for a in argv])
-    return args.func(args)
 
 
 def quiet(*argv):

@@ -1,10 +1,10 @@
-"""Hard-sphere runs through Simulation and the command line: summary keys, probes, resume.
+"""Hard-sphere runs through Simulation and the command line: summary keys, resume.
 
 Short runs of the built-in ``hoomans-pour`` (no gas) and ``hoomans-orifice`` (coupled)
 cases, and the start-up of the Table 2 gas cases (u_mf background before the jet onset T0).
-The energy balance itself is verified in tests/verification/test_hardsphere_pour.py.
+The energy balance, also of ``hoomans-pour`` through the command line, is verified in
+tests/verification/test_hardsphere_pour.py.
 """
-import csv
 import json
 
 import numpy as np
@@ -13,20 +13,6 @@ import pytest
 from fluidem.case import load_case
 from fluidem.cli import main
 from fluidem.simulation import Simulation
-
-
-def test_hoomans_pour_reports_collisions_and_energy_balance(tmp_path):
-    out = tmp_path / "run"
-    assert main(["run", "hoomans-pour", "--until", "0.15", "--out", str(out), "--quiet"]) == 0
-    s = json.loads((out / "summary.json").read_text())
-    assert s["status"] in ("completed", "stopped")
-    assert s["collisions"] > 100 and s["collisions_per_s"] > 0
-    # free fall dominates the first 0.15 s: the drift is −g DT t/(2 h̄) ≈ 3e-4 (first order in DT)
-    assert 0.0 < s["energy_error_rel"] < 1e-3
-    rows = list(csv.DictReader(open(out / "probes.csv")))
-    assert {"dissipated_normal_J", "dissipated_tangential_J", "total_energy_J", "collisions"} <= set(rows[0])
-    diss = np.array([float(r["dissipated_normal_J"]) + float(r["dissipated_tangential_J"]) for r in rows])
-    assert np.all(np.diff(diss) >= 0.0) and diss[-1] > 0.0  # dissipation only grows
 
 
 def test_hard_sphere_run_resumes_bit_for_bit(tmp_path):
@@ -74,7 +60,7 @@ def test_table2_cases_start_at_umf_and_switch_the_jet_on_at_t0(name, jet):
     case = load_case(name)
     assert case.time.end == pytest.approx(T0 + 1.0)
     grid = case.gas.grid.build()
-    bottom = case.gas.boundaries["bottom"].build()
+    bottom = case.gas.boundaries["bottom"]  # the Inflow itself
     weights = bottom.face_weights(grid.x_faces)
 
     def faces(t):
@@ -96,7 +82,7 @@ def test_coupled_hard_sphere_run_resumes(stopped_and_resumed):
     case = load_case("hoomans-orifice", {"time.end": 0.02, "output.checkpoint_interval": 0.01,
                                          "output.snapshot_interval": 0.01, "output.probe_interval": 0.005})
     whole, first, again = stopped_and_resumed(case, 0.01)
-    assert again.step == whole.step == 200
+    assert again.steps == whole.steps == 200
     # the time split goes on from the checkpoint: the resumed run's totals include the first part's
     for k in ("particle_time_s", "gas_time_s", "output_time_s"):
         assert again.summary()[k] > first.summary()[k] > 0.0

@@ -15,8 +15,15 @@ Dotted keys follow the case file: ``particles.contact.restitution``; an array of
 (``....interstitial.pulse``). A choice of models (a discriminated union, such as the contact law chosen
 by ``model``) gets a section per model.
 
-MkDocs runs this file as a hook (``hooks:`` in ``mkdocs.yml``): ``on_page_markdown`` replaces the
-content of ``reference/case.md`` with the generated page. The module needs no MkDocs (it imports the
+``registered_models_markdown(kind)``
+    a table of the models a registry holds (contact laws, drag laws, gas boundary conditions): name,
+    class, what its docstring says first, its keys and its reference test. A physics page places it with
+    the comment ``<!-- registered: contact -->`` (``drag``, ``gas``), so a new model appears there without
+    an edit to the page.
+
+MkDocs runs this file as a hook (``hooks:`` in ``mkdocs.yml``): ``on_page_markdown`` (``render_page``)
+replaces the content of ``reference/case.md`` with the generated page and each registry comment with
+its table. The module needs no MkDocs (it imports the
 standard library, pydantic and fluidem only), so tests import it directly, and
 ``python docs/hooks/case_reference.py`` prints the page.
 """
@@ -468,12 +475,52 @@ def case_reference_markdown() -> str:
     return "\n".join(out).rstrip() + "\n"
 
 
+# ------------------------------------------------------------------ registered models
+REGISTERED = re.compile(r"<!-- registered: (contact|drag|gas) -->")
+
+
+def _registry(kind: str):
+    if kind == "contact":
+        from fluidem.particles.contact import contact_models
+
+        return contact_models, "model"
+    if kind == "drag":
+        from fluidem.coupling.drag import drag_laws
+
+        return drag_laws, "model"
+    from fluidem.gas.boundaries import boundary_conditions
+
+    return boundary_conditions, "kind"
+
+
+def registered_models_markdown(kind: str) -> str:
+    """A table of every model of the ``kind`` registry ("contact", "drag" or "gas")."""
+    registry, tag = _registry(kind)
+    rows = [f"| `{tag}` | class | what it is | keys | reference test |", "| --- | --- | --- | --- | --- |"]
+    for name in registry.names():
+        cls = registry.get(name)
+        keys = ", ".join(f"`{k}`" for k in _fields_of(cls) if k != tag) or "none"
+        test = getattr(cls, "reference_test", "") or "none"
+        rows.append(f"| `{name}` | `{cls.__name__}` | {_description(_first_paragraph(cls))} | {keys} | `{test}` |")
+    return "\n".join(rows) + "\n"
+
+
+def _fields_of(cls) -> list[str]:
+    return list(getattr(cls, "model_fields", {}))
+
+
+def render_page(markdown: str, src_uri: str) -> str:
+    """A page's Markdown as the site shows it: the generated reference for ``reference/case.md``, and each
+    ``<!-- registered: KIND -->`` comment replaced by its table."""
+    if src_uri == PAGE:
+        return case_reference_markdown()
+    return REGISTERED.sub(lambda m: registered_models_markdown(m.group(1)), markdown)
+
+
 # ------------------------------------------------------------------ MkDocs hook
 def on_page_markdown(markdown: str, page, config, files) -> str:
-    """MkDocs hook: the page ``reference/case.md`` gets the generated reference as its content."""
-    if page.file.src_uri == PAGE:
-        return case_reference_markdown()
-    return markdown
+    """MkDocs hook: ``render_page``."""
+    return render_page(markdown, page.file.src_uri)
 
 
 if __name__ == "__main__":

@@ -1,17 +1,15 @@
-"""Where the wall time of a coupled run goes: DEM, gas solve, map, cell β, interpolation + drag.
+"""Where the wall time of a coupled gas step goes: DEM, gas solve, map, cell β, deposit, forces.
 
-    python benchmarks/coupled_profile.py [--case tsuji-jet] [--until 0.2] [--repeat 3]
-                                         [--set coupling.drag_update=frozen ...]
-                                         [--from runs/tsuji/restart.h5] [--jacobian-reuse 0.03]
+    fluidem run tsuji-jet --out runs/tj20                    # a developed bed (20 s) to start from
+    NUMBA_NUM_THREADS=2 python benchmarks/coupled_profile.py --from runs/tj20/restart.h5 --until 0.2 --repeat 3
+    python benchmarks/coupled_profile.py --case hoomans-orifice --until 0.01 --repeat 1 [--set key=value ...]
 
-``--from`` starts each timed run from a checkpoint of the same case (a developed, bubbling
-bed instead of the settling start); ``--until`` then counts from the checkpoint's time.
-
-Builds ``Simulation(load_case(case))`` (no run directory, no observers), warms the compiled
-kernels up with a short run of a copy, then times ``Simulation.run(until=…)`` of a fresh one.
-Each component is timed with ``time.perf_counter`` by wrapping the bound methods of that one
-simulation's objects (instance attributes; nothing global is patched; ``fluidem.bench.profile_coupled``,
-which ``fluidem bench`` uses too):
+Each round builds ``Simulation(load_case(case))`` (no run directory, no observers), loads the
+checkpoint of ``--from`` if given (a developed, bubbling bed instead of the settling start; ``--until``
+then counts from its time), and times ``Simulation.run`` for ``--until`` simulated seconds; a short
+untimed run first compiles the kernels or loads their caches. Each component is timed with
+``time.perf_counter`` by wrapping the bound methods of that one simulation's objects
+(``fluidem.bench.profile_coupled``, which ``fluidem bench`` uses too; nothing global is patched):
 
     DEM             engine.advance
     gas solve       gas.solver.advance
@@ -22,7 +20,9 @@ which ``fluidem bench`` uses too):
                     and the swap into the engine's external and total forces)
     other           the rest of run(): the step loop, chunking, checks
 
-Numbers are from a shared 2-vCPU machine: repeat (``--repeat``) and read the minimum.
+Printed: milliseconds per gas step of each component, min, median and max over the rounds, and the
+gas solver's factorisations and Newton corrections per gas step. On a shared machine read the
+minimum.
 """
 from __future__ import annotations
 
@@ -31,13 +31,15 @@ import json
 from pathlib import Path
 
 import fluidem as fd
-from fluidem.gas import _solver_kernels as K
+from fluidem.bench import COUPLED_COMPONENTS, profile_coupled
 
-from fluidem.bench import COUPLED_COMPONENTS as COMPONENTS
-from fluidem.bench import profile_coupled
+import harness  # benchmarks/harness.py: this script's folder is first on sys.path
+
+KEYS = [k for k, _, _ in COUPLED_COMPONENTS] + ["other", "total"]
 
 
-def _parse_sets(items):
+def parse_sets(items) -> dict:
+    """``key=value`` overrides as ``fluidem run --set`` takes them (values read as JSON where they parse)."""
     out = {}
     for s in items or []:
         k, _, v = s.partition("=")
@@ -48,15 +50,12 @@ def _parse_sets(items):
     return out
 
 
-def profile(case, until: float, start=None, jacobian_reuse=None) -> dict:
+def profile(case, until: float, start: Path | None = None) -> dict:
+    """One timed run: milliseconds per gas step of each component (``value``: the whole step)."""
     sim = fd.Simulation(case)
     if start is not None:
         sim.load_checkpoint(start)
-        until = sim.time + until
     solver = sim.gas.solver
-    if jacobian_reuse is not None:  # GasSolver's argument; not a case key
-        solver.jacobian_reuse = jacobian_reuse
-        solver._fpar[K.F_REUSE] = jacobian_reuse
     f0, steps0 = solver.factorisations, sim.gas.gas_steps
     corrections = []
     advance = solver.advance
@@ -67,46 +66,44 @@ def profile(case, until: float, start=None, jacobian_reuse=None) -> dict:
         return info
 
     solver.advance = counted
-    row = profile_coupled(sim, until)
+    row = profile_coupled(sim, sim.time + until)
     steps = max(sim.gas.gas_steps - steps0, 1)
-    row["factorisations_per_step"] = (solver.factorisations - f0) / steps
-    row["corrections_per_step"] = sum(corrections) / steps
-    return row
+    out = {k: 1e3 * row[k] / steps for k in KEYS}
+    out.update(value=out["total"], gas_steps=row["gas_steps"],
+               factorisations_per_step=(solver.factorisations - f0) / steps,
+               corrections_per_step=sum(corrections) / steps, calls=row["calls"])
+    return out
 
 
-def main() -> None:
+def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--case", default="tsuji-jet")
-    ap.add_argument("--until", type=float, default=0.2, help="simulated seconds [s]")
-    ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--set", action="append", help="case override key=value (as `fluidem run --set`)")
-    ap.add_argument("--json", help="write the rows as JSON")
+    ap.add_argument("--case", default="tsuji-jet", help="built-in case name or case file")
+    ap.add_argument("--until", type=float, default=0.2, help="simulated seconds timed in each round [s]")
+    ap.add_argument("--set", action="append", metavar="KEY=VALUE", help="case override (as `fluidem run --set`)")
     ap.add_argument("--from", dest="start", type=Path, help="checkpoint (restart.h5) of the same case to start from")
-    ap.add_argument("--jacobian-reuse", type=float, default=None,
-                    help="the gas solver's jacobian_reuse (default its own, 0.01): factors kept while the matrix "
-                         "changes less than this")
-    a = ap.parse_args()
+    harness.add_options(ap, repeat=3)
+    a = ap.parse_args(argv)
     case = fd.load_case(a.case)
-    sets = _parse_sets(a.set)
+    sets = parse_sets(a.set)
     if sets:
         case = case.with_overrides(sets)
     fd.Simulation(case).run(until=min(a.until, 20 * case.gas.dt))  # compile / load the caches
-    rows = [profile(case, a.until, a.start, a.jacobian_reuse) for _ in range(a.repeat)]
-    keys = [k for k, _, _ in COMPONENTS] + ["other", "total"]
-    n = rows[0]["gas_steps"]
-    print(f"case {a.case}, {a.until} s from {a.start or 'the start'}, {n} gas steps, overrides {sets or 'none'}; fluidem {fd.__file__}")
-    print(f"{'component':12s} " + " ".join(f"{'run ' + str(r + 1):>9s}" for r in range(len(rows)))
-          + f" {'min':>9s} {'ms/gas step':>12s}")
-    for k in keys:
-        vals = [r[k] for r in rows]
-        print(f"{k:12s} " + " ".join(f"{v:9.3f}" for v in vals) + f" {min(vals):9.3f} {1e3 * min(vals) / n:12.4f}")
-    print("calls: " + ", ".join(f"{k} {v}" for k, v in rows[0]["calls"].items()))
-    print(f"gas solver: {rows[0]['factorisations_per_step']:.3f} factorisations and "
-          f"{rows[0]['corrections_per_step']:.2f} Newton corrections per gas step")
-    if a.json:
-        with open(a.json, "w") as f:
-            json.dump({"case": a.case, "until": a.until, "overrides": sets, "rows": rows}, f, indent=2)
+    rounds = harness.run_rounds({"profile": lambda: profile(case, a.until, a.start)}, a.repeat, unit="ms")
+    first = rounds.extras["profile"][0]
+    print(f"case {a.case}, {a.until:g} s from {a.start or 'the start'}, {first['gas_steps']} gas steps a round, "
+          f"{a.repeat} rounds, overrides {sets or 'none'}; fluidem {fd.__file__}")
+    rows = []
+    for k in KEYS:
+        s = rounds.stats("profile", k)
+        rows.append([k, s["min"], s["median"], s["max"]])
+    print(harness.format_table(["ms per gas step", "min", "median", "max"], rows))
+    print("calls: " + ", ".join(f"{k} {v}" for k, v in first["calls"].items()))
+    print(f"gas solver: {rounds.stats('profile', 'factorisations_per_step')['median']:.3f} factorisations and "
+          f"{rounds.stats('profile', 'corrections_per_step')['median']:.2f} Newton corrections per gas step (median)")
+    harness.write_json(a.json, {"profile": rounds}, case=a.case, until_s=a.until, overrides=sets,
+                       start=str(a.start) if a.start else None)
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

@@ -39,22 +39,15 @@ from fluidem.state import ParticleState
 DIAMETER = 4e-3  # [m]
 DENSITY = 2500.0  # [kg/m^3]
 
-# Default parameters per registered contact model. A new model must add its row here;
-# the registry-parametrised tests then cover it without further code.
-LAW_DEFAULTS: dict[str, dict] = {
-    "linear_spring_dashpot": {"stiffness": 1.0e4},
-    "hertz_mindlin": {"youngs_modulus": 1.0e8, "poisson_ratio": 0.3},
-    "hard_sphere": {},
-}
 
 
 def law_dict(model: str, **changes) -> dict:
     """Contact-law dictionary of a registered model with the test defaults, updated by ``changes``."""
     if model not in contact_models:
         raise KeyError(f"{model!r} is not a registered contact model: {contact_models.names()}")
-    if model not in LAW_DEFAULTS:
-        raise KeyError(f"tests/conftest.py: add default parameters for the new contact model {model!r}")
-    return {"model": model, "restitution": 0.9, "friction": 0.3, **LAW_DEFAULTS[model], **changes}
+    # each model's ``example`` parameters (a valid law of the model): the registry-parametrised tests cover a
+    # new model without further code
+    return {"model": model, "restitution": 0.9, "friction": 0.3, **contact_models.get(model).example, **changes}
 
 
 def write_particle_csv(path, pos, diam, vel=None, species=None):

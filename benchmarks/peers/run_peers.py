@@ -7,14 +7,18 @@ Debian's ``lmp`` and ``liggghts`` binaries and reports particle-steps per second
 stepping loop only (parsed from "Loop time of X on P procs for N steps with M atoms").
 
     python benchmarks/peers/run_peers.py --bed BED.npz --steps 2000 --ranks 1,2 \
-        [--codes lammps,liggghts] [--json OUT.json] [--install]
+        [--codes lammps,liggghts] [--repeat 3] [--json OUT.json] [--install]
     python benchmarks/peers/run_peers.py --settle-with-lammps BED.npz --n 10000 --box 0.08
     python benchmarks/peers/run_peers.py --bed BED.npz --stats-only
 
 BED.npz: position (N,3), diameter (N,), box_lower (3,), box_upper (3,) [m]; the box is
 closed by six plane walls; velocities are zero; rho = 2700 kg/m^3.
 
-Library use (stdlib + numpy only)::
+``--repeat N``: rounds, each running every (code, ranks) once in alternating order
+(``benchmarks/harness.py``, as every script of benchmarks/); ``--json``: the rows, every
+round, the machine and the git revision.
+
+Library use (stdlib + numpy and ``benchmarks/harness.py`` only)::
 
     spec = importlib.util.spec_from_file_location("run_peers", path)
     mod = importlib.util.module_from_spec(spec); spec.loader.exec_module(mod)
@@ -28,7 +32,6 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
-import json
 import math
 import os
 import re
@@ -391,35 +394,32 @@ def _cpu_snapshot():
 
 
 def run_one(code: str, bed: dict, steps: int, ranks: int, warmup: int = 100,
-            timeout: float = 900.0, keep_dir=None, repeat: int = 1) -> dict:
-    """Run one peer on the bed `repeat` times; report the fastest stepping loop."""
+            timeout: float = 900.0, keep_dir=None) -> dict:
+    """Run one peer on the bed once; report its stepping loop."""
     n = int(len(bed["diameter"]))
     row = {"code": code, "ranks": int(ranks), "n_particles": n, "steps": int(steps)}
     if code not in CODES:
         row["error"] = f"unknown code {code!r}; known: {', '.join(CODES)}"
         return row
     tmp = Path(tempfile.mkdtemp(prefix=f"peers_{code}_{ranks}_", dir=keep_dir))
-    runs = []
     try:
         write_data_file(tmp / "bed.data", bed)
         vals = deck_values(bed, "bed.data")
         vals.update(steps=str(int(steps)), warmup=str(int(warmup)),
                     thermo=str(max(int(steps), 1)))
         deck = (LAMMPS_DECK if code == "lammps" else LIGGGHTS_DECK).substitute(vals)
-        for _ in range(max(int(repeat), 1)):
-            b0, c0 = _cpu_snapshot()
-            t0 = time.perf_counter()
-            rc, out, cmd = run_deck(code, deck, tmp, ranks, timeout)
-            wall = time.perf_counter() - t0
-            b1, c1 = _cpu_snapshot()
-            loops = LOOP_RE.findall(out)
-            if rc != 0 or not loops:
-                row["error"] = (f"{code} failed (exit {rc}) in {tmp}; command: "
-                                f"{' '.join(cmd)}\n" + _tail(out))
-                return row
-            # cores kept busy by other processes while this run went on
-            others = max(((b1 - b0) - (c1 - c0)) / wall, 0.0) if wall > 0 else 0.0
-            runs.append((float(loops[-1][0]), loops[-1], out, wall, others))
+        b0, c0 = _cpu_snapshot()
+        t0 = time.perf_counter()
+        rc, out, cmd = run_deck(code, deck, tmp, ranks, timeout)
+        wall = time.perf_counter() - t0
+        b1, c1 = _cpu_snapshot()
+        loops = LOOP_RE.findall(out)
+        if rc != 0 or not loops:
+            row["error"] = (f"{code} failed (exit {rc}) in {tmp}; command: "
+                            f"{' '.join(cmd)}\n" + _tail(out))
+            return row
+        # cores kept busy by other processes while this run went on
+        others = max(((b1 - b0) - (c1 - c0)) / wall, 0.0) if wall > 0 else 0.0
     except FileNotFoundError as exc:
         if keep_dir is None:
             shutil.rmtree(tmp, ignore_errors=True)
@@ -431,13 +431,11 @@ def run_one(code: str, bed: dict, steps: int, ranks: int, warmup: int = 100,
     except Exception as exc:                                  # never a traceback
         row["error"] = f"{type(exc).__name__}: {exc}"
         return row
-    loop_t, (_, procs, nsteps, natoms), out, wall, others = min(runs, key=lambda r: r[0])
-    nsteps, natoms = int(nsteps), int(natoms)
+    loop_t, procs, nsteps, natoms = loops[-1]
+    loop_t, nsteps, natoms = float(loop_t), int(nsteps), int(natoms)
     row.update(loop_time_s=loop_t,
                particle_steps_per_s=natoms * nsteps / loop_t if loop_t > 0 else float("inf"),
                version=parse_version(code, out))
-    if len(runs) > 1:
-        row["loop_times_s"] = [r[0] for r in runs]
     if natoms != n or nsteps != steps or int(procs) != ranks:
         row["warning"] = f"log says {natoms} atoms, {nsteps} steps, {procs} procs"
     m = re.findall(r"Neighbor list builds\s*=\s*(\d+)", out)
@@ -457,10 +455,27 @@ def run_one(code: str, bed: dict, steps: int, ranks: int, warmup: int = 100,
     return row
 
 
+def harness_module():
+    """``benchmarks/harness.py`` (interleaved rounds, JSON), the module a calling script already has if any."""
+    if "harness" in sys.modules:
+        return sys.modules["harness"]
+    spec = importlib.util.spec_from_file_location("harness", HERE.parent / "harness.py")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules["harness"] = mod  # its dataclass looks its module up by name
+    spec.loader.exec_module(mod)
+    return mod
+
+
 def run_peers(bed_path, steps: int = 2000, ranks=(1, 2), codes=CODES, warmup: int = 100,
               timeout: float = 900.0, install: bool = False, keep_dir=None,
-              repeat: int = 1) -> list:
-    """Run each peer code at each rank count on the bed; one dict per (code, ranks)."""
+              repeat: int = 1, rounds_out: dict | None = None) -> list:
+    """Run each peer code at each rank count on the bed; one dict per (code, ranks).
+
+    ``repeat`` rounds, each running every (code, ranks) once in the alternating order of
+    ``harness.round_order``; a row is the fastest round's, with ``rounds_particle_steps_per_s``
+    (every round's rate) and ``median_particle_steps_per_s`` added when there are several.
+    ``rounds_out``: a dict that receives the ``harness.Rounds`` under "peers".
+    """
     if isinstance(ranks, (int, str)):
         ranks = [int(r) for r in str(ranks).split(",") if r.strip()]
     if isinstance(codes, str):
@@ -474,8 +489,36 @@ def run_peers(bed_path, steps: int = 2000, ranks=(1, 2), codes=CODES, warmup: in
         (any(r > 1 for r in ranks) and mpi_launcher(2) is None)
     if install and missing:
         print("[run_peers] " + install_peers(), file=sys.stderr)
-    return [run_one(c, bed, steps, int(r), warmup, timeout, keep_dir, repeat)
-            for c in codes for r in ranks]
+    jobs = [(c, int(r)) for c in codes for r in ranks]
+    runs = {job: [] for job in jobs}
+
+    def variant(job):
+        def measure():
+            row = run_one(job[0], bed, steps, job[1], warmup, timeout, keep_dir)
+            runs[job].append(row)
+            return row.get("particle_steps_per_s")
+
+        return measure
+
+    harness = harness_module()
+    rounds = harness.run_rounds({f"{c} x{r}": variant((c, r)) for c, r in jobs}, max(int(repeat), 1),
+                                unit="particle-steps/s")
+    if rounds_out is not None:
+        rounds_out["peers"] = rounds
+    rows = []
+    for job in jobs:
+        ok = [r for r in runs[job] if "error" not in r]
+        if not ok:
+            rows.append(runs[job][0])
+            continue
+        best = dict(max(ok, key=lambda r: r["particle_steps_per_s"]))
+        if len(runs[job]) > 1:
+            rates = [r.get("particle_steps_per_s") for r in runs[job]]
+            best["rounds_particle_steps_per_s"] = rates
+            best["median_particle_steps_per_s"] = harness.spread(rates)["median"]
+            best["loop_times_s"] = [r.get("loop_time_s") for r in runs[job]]
+        rows.append(best)
+    return rows
 
 
 # ---------------------------------------------------------------- settled bed
@@ -659,9 +702,12 @@ def format_rows(rows) -> str:
             out.append(f"{r['code']:9s} {r['ranks']:5d} {r['n_particles']:7d} "
                        f"{r['steps']:6d}  ERROR: {r['error'].splitlines()[0]}")
         else:
+            med = r.get("median_particle_steps_per_s")
             out.append(f"{r['code']:9s} {r['ranks']:5d} {r['n_particles']:7d} "
                        f"{r['steps']:6d} {r['loop_time_s']:9.3f} "
-                       f"{r['particle_steps_per_s']:17.3e}  {r['version']}")
+                       f"{r['particle_steps_per_s']:17.3e}  {r['version']}"
+                       + (f"  (median of {len(r['rounds_particle_steps_per_s'])} rounds {med:.3e})"
+                          if med else ""))
     return "\n".join(out)
 
 
@@ -673,13 +719,15 @@ def main(argv=None) -> int:
     ap.add_argument("--steps", type=int, default=2000, help="timed steps (default 2000)")
     ap.add_argument("--ranks", default="1,2", help="comma-separated MPI rank counts")
     ap.add_argument("--codes", default="lammps,liggghts", help="lammps,liggghts")
-    ap.add_argument("--json", help="write the result rows to this JSON file")
+    ap.add_argument("--json", help="write the rows, every round, the machine and the git revision "
+                                   "to this JSON file")
     ap.add_argument("--install", action="store_true",
                     help="apt-get install lammps liggghts openmpi-bin if missing")
     ap.add_argument("--warmup", type=int, default=100, help="untimed steps first (100)")
     ap.add_argument("--timeout", type=float, default=900.0, help="per run, seconds")
-    ap.add_argument("--repeat", type=int, default=1,
-                    help="runs per (code, ranks); the fastest loop is reported (1)")
+    ap.add_argument("--repeat", type=int, default=1, metavar="N",
+                    help="rounds; each round runs every (code, ranks) once, the order alternating; "
+                         "the fastest round is reported, with the median (1)")
     ap.add_argument("--keep", metavar="DIR", help="keep decks/logs in DIR")
     ap.add_argument("--stats", action="store_true", help="also print bed statistics")
     ap.add_argument("--stats-only", action="store_true", help="only print bed statistics")
@@ -721,8 +769,9 @@ def main(argv=None) -> int:
         if a.stats_only:
             return 0
 
+    rounds = {}
     rows = run_peers(a.bed, a.steps, ranks, codes, a.warmup, a.timeout, a.install, a.keep,
-                     a.repeat)
+                     a.repeat, rounds_out=rounds)
     print(format_rows(rows))
     for r in rows:
         if "warning" in r:
@@ -730,9 +779,8 @@ def main(argv=None) -> int:
     for r in rows:
         if "error" in r and "\n" in r["error"]:
             print(f"\n--- {r['code']} x{r['ranks']} ---\n{r['error']}", file=sys.stderr)
-    if a.json:
-        Path(a.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(a.json).write_text(json.dumps(rows, indent=2) + "\n")
+    harness_module().write_json(a.json, {"rows": rows, **rounds}, bed=a.bed, steps=a.steps,
+                                warmup=a.warmup)
     return 0 if all("error" not in r for r in rows) else 1
 
 

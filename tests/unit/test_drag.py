@@ -81,7 +81,11 @@ REFERENCES = {"hoomans1996": ref_hoomans, "hoomans1996_total": ref_hoomans_total
 
 
 def test_every_registered_closure_has_a_reference():
-    assert sorted(REFERENCES) == drag_laws.names()
+    """The laws referenced here are registered; a law added by its own file names its own reference test
+    (``reference_test``, checked for every law by tests/unit/test_model_references.py)."""
+    assert set(REFERENCES) <= set(drag_laws.names())
+    for name in set(drag_laws.names()) - set(REFERENCES):
+        assert drag_laws.get(name).reference_test != "test_closure_matches_published_formula", name
 
 
 @pytest.mark.parametrize("name", sorted(REFERENCES))

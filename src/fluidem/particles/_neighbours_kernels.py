@@ -11,8 +11,7 @@ independent of the number of threads.
 
 How ``build_pairs`` finds the pairs, and why so. Measured with one thread on the tsuji-jet
 state at t = 1.5 s (2400 spheres in one layer, 24,800 candidates, 4006 pairs) and on the
-10,000-sphere 3D bed of ``fluidem bench`` (584,000 candidates, 46,052 pairs) with
-``benchmarks/neighbour_build.py``. The former build filled each particle's row in turn: 27 (9)
+10,000-sphere 3D bed of ``fluidem bench`` (584,000 candidates, 46,052 pairs). The former build filled each particle's row in turn: 27 (9)
 cells, a loop of 0-6 candidates each, read through ``members[m]`` from the particle arrays,
 then an insertion sort of the row. Its fill cost ~27 ns a candidate in 2D and 11 ns in 3D,
 where a loop over candidates should take 2-3 ns. Three causes:
@@ -358,7 +357,7 @@ def build_pairs(pos, radius, skin, dim2, expected=0, slabs=0):
     list's length) sizes the buffers, which grow if too small. The result does not depend
     on the chunking or the thread count: it is the sorted set of pairs. Pairs are packed as
     owner << 32 | partner, which needs N < 2^31 (as the int32 partners do). ``slabs``: the most slabs
-    (0: ``max_slabs(N)``, what the engine uses; ``benchmarks/pair_phase.py`` times others).
+    (0: ``max_slabs(N)``, what the engine uses).
     """
     n = pos.shape[0]
     lo, hi, rmax = _bounds(pos, radius)

@@ -44,6 +44,9 @@ class ContactModel(BaseModel):
     instantaneous: ClassVar[bool] = False  # True: hard-sphere collisions, handled by the event-driven engine
     # the test that checks this law against an analytic or published result (a function name under tests/)
     reference_test: ClassVar[str] = ""
+    # parameters that make a valid law of this model besides restitution and friction (the registry-parametrised
+    # tests build each model from them)
+    example: ClassVar[dict] = {}
 
     def pack(self, body_i: "Material", body_j: "Material | None") -> np.ndarray:
         """Parameter row for a contact of body i with body j (j=None: a rigid wall of i's material)."""

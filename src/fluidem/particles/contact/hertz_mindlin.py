@@ -90,6 +90,7 @@ class HertzMindlin(ContactModel):
 
     code: ClassVar[int] = CODE
     reference_test: ClassVar[str] = "test_particle_particle_collision"  # restitution, Hertz impact time
+    example: ClassVar[dict] = {"youngs_modulus": 1.0e8, "poisson_ratio": 0.3}
 
     def _moduli(self, body_i, body_j):
         def mat(b):

@@ -47,6 +47,7 @@ class LinearSpringDashpot(ContactModel):
 
     code: ClassVar[int] = CODE
     reference_test: ClassVar[str] = "test_particle_particle_collision"  # Sun 2007 eqs 25-26
+    example: ClassVar[dict] = {"stiffness": 1.0e4}
 
     def pack(self, body_i, body_j) -> np.ndarray:
         row = empty_row(CODE, self.friction)

@@ -2,11 +2,12 @@
 
 Three kinds of names: integer codes (face kinds, ghost rules, linear solvers, step status, input
 modes); the slots of the solver's stacked arrays and parameter vectors, one prefix per array, each
-with a table of what its slots hold; and the named tuples that group the arrays of the kernels the
-solver calls once per step (Numba compiles a named tuple of arrays into a struct and caches the
-kernels that take one). Index conventions of the padded arrays are those of ``grid.py``: centre
-arrays ``(nx + 2, ny + 2)`` with cell (i, j) at ``[i + 1, j + 1]``; ``U`` ``(nx + 5, ny + 4)`` with
-x-face (i, j) at ``[i + 2, j + 2]``; ``V`` ``(nx + 4, ny + 5)`` with y-face (i, j) at ``[i + 2, j + 2]``.
+with a table of what its slots hold; and the named tuples that group the arrays of the step's
+kernels (Numba compiles a named tuple of arrays into a struct and caches the kernels that take one;
+``_solver_kernels.step``, the one the solver calls, takes them as plain tuples and names them).
+Index conventions of the padded arrays are those of ``grid.py``: centre arrays ``(nx + 2, ny + 2)``
+with cell (i, j) at ``[i + 1, j + 1]``; ``U`` ``(nx + 5, ny + 4)`` with x-face (i, j) at
+``[i + 2, j + 2]``; ``V`` ``(nx + 4, ny + 5)`` with y-face (i, j) at ``[i + 2, j + 2]``.
 """
 from typing import NamedTuple
 

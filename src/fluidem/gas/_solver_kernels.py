@@ -138,6 +138,7 @@ from ._layout import (  # codes and slots: the tables are in _layout.py
     V_WORK,
     V_WORK2,
 )
+from ._layout import BandFactors, Boundaries, Fields, LUFactors, Multigrid, PressureSystem, StateArrays
 from ._linear_kernels import band_factor, band_solve, lu_solve
 from ._multigrid_kernels import gmres, mg_setup
 from ._operators import (
@@ -1027,13 +1028,21 @@ def step(resume, dt, state, eps_new, bu, bv, su, sv, qu, qv, modes, fields, bnd,
          out):
     """One gas step of ``dt`` [s] in one call: ``start_step`` (not when ``resume``: the call after the
     caller made the SuperLU factors that the previous one asked for), ``iterate`` and, when the step
-    succeeded, ``end_step`` (the state at t + dt written into ``state``, a ``StateArrays``).
+    succeeded, ``end_step`` (the state at t + dt written into ``state``).
+
+    ``state``, ``fields``, ``bnd``, ``system``, ``lu``, ``band``, ``mg``: the arrays of ``StateArrays``,
+    ``Fields``, ``Boundaries``, ``PressureSystem``, ``LUFactors``, ``BandFactors``, ``Multigrid``
+    (``_layout.py``) as plain tuples in the order of their fields, named here: Numba types a plain
+    tuple argument in compiled code, a named tuple through Python, which costs about twice as much
+    per array at every call.
 
     Returns BAD_VOIDAGE or BAD_BETA (an input out of range; nothing done), NEED_FACTORS (call again
     with ``resume`` after factorising ``MAT[M_DATA]``), or the status of ``iterate``. The state is
     written unless the status is NOT_FINITE or the mass residual ended above ``fpar[FP_SQRT_TOL]``:
     a failed step leaves it as it was at t.
     """
+    state, fields, bnd = StateArrays(*state), Fields(*fields), Boundaries(*bnd)
+    system, lu, band, mg = PressureSystem(*system), LUFactors(*lu), BandFactors(*band), Multigrid(*mg)
     if not resume:
         status = start_step(dt, state, eps_new, bu, bv, su, sv, qu, qv, modes, fields, bnd, fpar, ipar, out)
         if status != INPUT_OK:

@@ -313,7 +313,8 @@ class GasSolver:
         self._set_boundary_values(0.0)
         self.C[lay.C_PFIX_OLD] = self.C[lay.C_PFIX]
         self._shapes = (grid.shape, grid.u_shape, grid.v_shape)
-        self._state_arrays = None  # the state arrays _check_state found right (a lay.StateArrays)
+        self._state_arrays = None  # the state arrays _check_state found right (a lay.StateArrays, and as a tuple)
+        self._state_tuple = ()
         self._fields = lay.Fields(self.U, self.V, self.G, self.H, self.C, self.FU, self.FV, self.TAU)
         self._bnd = lay.Boundaries(self.flags, self.KU, self.KV, self.RULES, self.row_of)
         self._system = lay.PressureSystem(self.MAT, self.VEC, self._csc_indices, self._csc_indptr, self.diag_pos,
@@ -322,9 +323,10 @@ class GasSolver:
         self._set_groups()
 
     def _set_groups(self):
-        """The grouped arrays of ``K.step`` after the inputs, all persistent (the SuperLU factors change in
-        ``_factorise`` and ``restore_factors``)."""
-        self._groups = (self._fields, self._bnd, self._system, self._factors, self._band_factors, self._mg)
+        """The grouped arrays of ``K.step`` after the inputs, as plain tuples (see ``K.step``), all persistent
+        (the SuperLU factors change in ``_factorise`` and ``restore_factors``)."""
+        self._groups = tuple(tuple(g) for g in (self._fields, self._bnd, self._system, self._factors,
+                                                self._band_factors, self._mg))
 
     # ------------------------------------------------------------ set-up
     def _setup_faces(self):
@@ -644,13 +646,14 @@ class GasSolver:
             bad = float(eps[~((eps > 0.0) & (eps <= 1.0))].ravel()[0])
             raise CaseError(f"gas voidage: value {bad!r} outside (0, 1]")
 
-    def _check_state(self, state: GasState) -> lay.StateArrays:
-        """Shapes, dtype and layout of the state's arrays, returned grouped for the kernels; arrays found
-        right once are remembered (references) and not checked again while the state holds the same objects."""
+    def _check_state(self, state: GasState) -> tuple:
+        """Shapes, dtype and layout of the state's arrays, returned as the tuple of ``lay.StateArrays`` for
+        ``K.step``; arrays found right once are remembered (references) and not checked again while the
+        state holds the same objects."""
         ok = self._state_arrays
         if ok is not None and ok.p is state.p and ok.rho is state.rho and ok.voidage is state.voidage \
                 and ok.u is state.u and ok.v is state.v:
-            return ok
+            return self._state_tuple
         c, fu, fv = self._shapes
         for key, shape in (("p", c), ("rho", c), ("voidage", c), ("u", fu), ("v", fv)):
             a = getattr(state, key, None)
@@ -661,7 +664,8 @@ class GasSolver:
                 raise CaseError(f"gas state.{key}: must be a C-contiguous float64 array (as initial_state makes it), "
                                 f"not {a.dtype} {'contiguous' if a.flags.c_contiguous else 'strided'}")
         self._state_arrays = lay.StateArrays(state.p, state.rho, state.u, state.v, state.voidage)
-        return self._state_arrays
+        self._state_tuple = tuple(self._state_arrays)
+        return self._state_tuple
 
     # ------------------------------------------------------------ time step
     def advance(self, state: GasState, dt: float, t: float = 0.0, *, voidage=None, beta=None, solids_u=None,

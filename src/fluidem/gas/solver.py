@@ -71,8 +71,9 @@ SCHEMES = {"upwind": UPWIND, "tvd": TVD}
 SLOW_CONVERGENCE = 0.3  # refactorise the pressure matrix when an iteration cuts the residual by less than this
 BAND_MAX = 64  # band LU (compiled) up to this half-width; multigrid-preconditioned GMRES beyond
 LINEAR_SOLVERS = ("auto", "band", "multigrid", "superlu")
-# names refused with the reason: pyamg's AMG-preconditioned GMRES took 2.5 to 3 times as long per step as
-# "multigrid" on the benchmark bed at 150 x 300 and 300 x 600 cells, with as many Krylov iterations
+# names refused, with the reason: on the benchmark bed (``gas_step_benchmark``) pyamg's AMG-preconditioned
+# GMRES took 1.2 to 4 times as long per gas step as "multigrid" at 150 x 300 and 300 x 600 cells (2.6 to 3.5
+# times in the fastest of three repeats; 2.4 to 50 times on the smaller grids), with as many Krylov iterations
 REFUSED_SOLVERS = {"pyamg": "not offered: 'multigrid' (compiled GMRES with a grid multigrid) solves the same "
                             "corrections faster on every grid measured, 15 x 25 to 300 x 600 cells"}
 KRYLOV_REDUCTION = 1e-4  # multigrid path: each correction solves the linear system to this fraction of its residual
@@ -84,6 +85,17 @@ COARSEST = 64  # cells of the coarsest multigrid level (dense LU) at most
 def _ready(a, shape) -> bool:
     """``a`` is a C-contiguous float64 ndarray of ``shape``: a kernel input as it is."""
     return type(a) is np.ndarray and a.shape == shape and a.dtype == _F64 and a.flags.c_contiguous
+
+
+def _refused(name: str) -> CaseError:
+    """The CaseError of a ``linear_solver`` name in ``REFUSED_SOLVERS``."""
+    return CaseError(f"gas.linear_solver = {name!r}: {REFUSED_SOLVERS[name]}; allowed are "
+                     + ", ".join(repr(k) for k in LINEAR_SOLVERS))
+
+
+def _import_pyamg():
+    """Raises the CaseError of ``linear_solver = "pyamg"`` (refused): ``schema.py`` validates the key with it."""
+    raise _refused("pyamg")
 
 
 def _show(value) -> str:
@@ -286,8 +298,7 @@ class GasSolver:
         if not (0.0 <= jacobian_reuse < 1.0):
             raise CaseError(f"gas.jacobian_reuse = {jacobian_reuse!r}: must be in [0, 1)")
         if linear_solver in REFUSED_SOLVERS:
-            raise CaseError(f"gas.linear_solver = {linear_solver!r}: {REFUSED_SOLVERS[linear_solver]}; allowed are "
-                            + ", ".join(repr(k) for k in LINEAR_SOLVERS))
+            raise _refused(linear_solver)
         if linear_solver not in LINEAR_SOLVERS:
             raise CaseError(f"gas.linear_solver = {linear_solver!r}: allowed are "
                             + ", ".join(repr(k) for k in LINEAR_SOLVERS))

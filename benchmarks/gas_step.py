@@ -2,7 +2,7 @@
 
     python benchmarks/gas_step.py                                   # 15x25, 15x45 (tsuji-jet), 39x60, 150x300
     python benchmarks/gas_step.py --grids 15x45 --repeat 5 --seconds 2
-    python benchmarks/gas_step.py --grids 39x60,150x300 --linear-solver multigrid,pyamg --repeat 3
+    python benchmarks/gas_step.py --grids 39x60,75x150,150x300 --linear-solver band,multigrid,superlu --repeat 3
     python benchmarks/gas_step.py --grids 15x25 --seconds 0.2 --repeat 1       # a quick check
 
 Problems:
@@ -16,8 +16,8 @@ Problems:
   coupling hands them over.
 
 ``--linear-solver``: the ``GasSolver`` option ("auto", the default choice, or "band", "multigrid",
-"superlu", "pyamg"); a comma-separated list makes them the variants of each grid's rounds. pyamg's
-Krylov loop uses NumPy's BLAS: on a small shared machine run it with OPENBLAS_NUM_THREADS=1.
+"superlu"); a comma-separated list makes them the variants of each grid's rounds. SuperLU calls
+NumPy's BLAS: on a small shared machine run it with OPENBLAS_NUM_THREADS=1.
 
 Each round, for each grid, times every solver once on a fresh solver: the first 20 steps are not timed,
 then ``advance`` alone for ``--seconds``. Two clocks: wall time (``perf_counter``) and this process's CPU
@@ -120,8 +120,8 @@ def main(argv=None) -> int:
     ap.add_argument("--grids", default="15x25,15x45,39x60,150x300")
     ap.add_argument("--seconds", type=float, default=2.0, help="timed wall seconds of each solver in each round")
     ap.add_argument("--linear-solver", default="auto",
-                    help="GasSolver linear_solver: auto, band, multigrid, superlu, pyamg; a comma-separated list "
-                         "times each (e.g. multigrid,pyamg)")
+                    help="GasSolver linear_solver: auto, band, multigrid, superlu; a comma-separated list "
+                         "times each (e.g. band,multigrid)")
     harness.add_options(ap, repeat=3)
     a = ap.parse_args(argv)
     import fluidem

@@ -68,7 +68,7 @@ def coupled_variants(run_dir: Path, threads: list[int], per: int, tmp: Path) -> 
         shutil.copytree(run_dir, tmp / f"run{k}")
         sims[k] = fd.Simulation.resume(tmp / f"run{k}", threads=k)
         numba.set_num_threads(k)
-        sims[k].step_once(sims[k].gas.substeps)  # compile or load the caches
+        sims[k].advance(sims[k].gas.substeps)  # compile or load the caches
 
     def variant(k):
         sim = sims[k]
@@ -86,7 +86,7 @@ def coupled_variants(run_dir: Path, threads: list[int], per: int, tmp: Path) -> 
             sim.engine.advance = timed
             try:
                 t0 = time.perf_counter()
-                sim.step_once(per * sim.gas.substeps)
+                sim.advance(per * sim.gas.substeps)
                 total = time.perf_counter() - t0
             finally:
                 del sim.engine.advance

@@ -22,8 +22,8 @@ hard spheres The built-in ``hoomans-orifice`` case (Hoomans 1996 Table 2: 2400 h
             second on one core), collisions and milliseconds per step. The engine is serial.
 gas step    One gas-phase step on the 15 × 25, 39 × 60 and 150 × 300 grids
             (``gas_step_benchmark``: Hoomans 1996 orifice bed), with the
-            pressure-correction solver ``gas_linear_solver`` ("auto", or e.g. "pyamg"; for
-            solvers side by side see ``benchmarks/gas_step.py --linear-solver multigrid,pyamg``).
+            pressure-correction solver ``gas_linear_solver`` ("auto", or e.g. "band"; for
+            solvers side by side see ``benchmarks/gas_step.py --linear-solver band,multigrid``).
 
 Only the stepping loop is timed. Results are particle-steps per second.
 """
@@ -283,7 +283,7 @@ def gas_step_benchmark(grids=((15, 25), (39, 60), (150, 300)), seconds: float = 
     cross more than half the smaller cell side in a step (explicit convection):
     dt = min(1e-4, 0.5 min(dx, dy) / 45 m/s). The first 20 steps (compilation, start-up
     transient) are not timed; then ``advance`` alone is timed for about ``seconds`` per row.
-    ``linear_solver``: the ``GasSolver`` option (e.g. "pyamg" against "multigrid").
+    ``linear_solver``: the ``GasSolver`` option (e.g. "band" against "multigrid").
 
     Returns
     -------

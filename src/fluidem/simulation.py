@@ -225,8 +225,6 @@ class Simulation:
                 left -= cpl.particle_substeps(min(left, cpl.substeps - phase))
         self.particle_steps += nsteps * eng.state.n
 
-    step_once = advance  # the former name of ``advance``
-
     def run(self, until: float | None = None) -> dict:
         """Advance to simulated time ``until`` (default the case's end), firing observers; returns the summary."""
         until = self.case.time.end if until is None else until

@@ -111,7 +111,7 @@ def test_reference_rows_carry_the_declared_values(markdown):
     (diameter,) = rows["particles.species[].diameter"]
     assert "| required |" in diameter and "> 0.0" in diameter and "[m]" in diameter
     (solver,) = rows["gas.linear_solver"]
-    assert '`"auto"`' in solver and '`"pyamg"`' in solver
+    assert '`"auto"`' in solver and '`"multigrid"`' in solver
     (species,) = rows["particles.species"]
     assert "at least 1 item" in species
     # a key of a model in a choice: one row per model that has it

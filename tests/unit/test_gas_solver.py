@@ -5,8 +5,9 @@ import scipy.sparse as sp
 
 from fluidem.errors import CaseError
 from fluidem.gas import (GasConvergenceError, GasProperties, GasSolver, GasState, Inflow, PressureOutlet, Segment,
-                         StaggeredGrid, StepInfo, Wall, gas_step_benchmark)
-from fluidem.gas import _solver_kernels as K
+                         StaggeredGrid, StepInfo, Wall)
+from fluidem.bench import gas_step_benchmark
+from fluidem.gas import _linear_kernels as K
 from fluidem.gas._operators import TVD, UPWIND, centre_to_x_faces, centre_to_y_faces, face_value
 from fluidem.gas.solver import GAS_CONSTANT
 

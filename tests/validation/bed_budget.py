@@ -39,11 +39,11 @@ def main(argv):
     gd = sim.gas.grid
     area, height = gd.nx * gd.dx * gd.depth, gd.ny * gd.dy
     while sim.time < 2.0:
-        sim.step_once(sim.gas.substeps * 50)
+        sim.advance(sim.gas.substeps * 50)
     dp, force, gave, walls = [], [], [], {}
     t0, p0 = sim.time, float((sim.state.mass * sim.state.velocity[:, 1]).sum())
     while sim.time < 3.0:
-        sim.step_once(sim.gas.substeps)
+        sim.advance(sim.gas.substeps)
         dp.append(pressure_drop(gd, sim.gas.state.p, height))
         force.append(float(sim.engine.external_force()[:, 1].sum()))
         b = sim.gas.exchange_balance()

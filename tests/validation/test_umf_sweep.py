@@ -56,7 +56,7 @@ def sweep():
     chunk = int(round(0.005 / sim.dt))
     u, dp = [], []
     while sim.time < case.time.end - 1e-9:
-        sim.step_once(chunk)
+        sim.advance(chunk)
         if sim.time > T_SETTLE:
             u.append(U_MAX * (sim.time - T_SETTLE) / T_SWEEP)
             dp.append(pressure_drop(sim.gas.grid, sim.gas.state.p, H) - RHO * G * H)

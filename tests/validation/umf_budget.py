@@ -90,7 +90,7 @@ def main(eps_in=1.0, exchange="particle", u=0.4, end=0.65, start=0.35, profile=F
     layers = np.zeros((2, 60))  # Σ gas force, Σ m g per one-diameter layer
     dp, fg, floor, gas_side = [], [], [], []
     while sim.time < end - 1e-9:
-        sim.step_once(chunk if sim.time <= start else sim.gas.substeps)  # every gas step in the window
+        sim.advance(chunk if sim.time <= start else sim.gas.substeps)  # every gas step in the window
         if sim.time > start:
             dp.append(pressure_drop(sim.gas.grid, sim.gas.state.p, T.H) - T.RHO * T.G * T.H)
             f = eng.external_force()[:, 1]

@@ -47,7 +47,7 @@ def test_lone_particle_reaches_the_terminal_velocity_of_its_drag_law(drag, densi
     end = 0.4 if update == "frozen" else 0.3
     case = validate_case(settling_case(drag, density, pgf, end=end, drag_update=update, momentum_exchange=exchange))
     sim = Simulation(case)
-    sim.step_once(int(round(end / sim.dt)))
+    sim.advance(int(round(end / sim.dt)))
     rho_g = float(sim.gas.state.rho.mean())
     vt = terminal_velocity(drag, rho_g, pgf)
     v = -sim.state.velocity[0, 1]

@@ -29,7 +29,7 @@ from fluidem.coupling.drag import drag_laws
 from fluidem.coupling import interpolation as I
 from fluidem.coupling.exchange import GasCoupling, face_volumes
 from fluidem.gas.solver import GasState
-from fluidem.gas import _solver_kernels as SK
+from fluidem.gas import _layout as SK
 from fluidem.simulation import Simulation
 
 from _helpers.coupling import MAPPINGS, random_gas, random_particles
@@ -153,7 +153,7 @@ def test_closed_periodic_box_conserves_momentum(tmp_path, exchange):
     assert g0 == 0.0
     worst = 0.0
     for _ in range(40):
-        sim.step_once(sim.gas.substeps)
+        sim.advance(sim.gas.substeps)
         g, p = x_momentum(sim)
         worst = max(worst, abs(g + p - p0) / scale)
     assert worst < 1e-12, worst  # measured ~1e-16
@@ -169,7 +169,7 @@ def test_substep_drag_is_not_paired_exactly(tmp_path):
     scale = float(np.sum(sim.state.mass * np.abs(sim.state.velocity[:, 0])))
     _, p0 = x_momentum(sim)
     for _ in range(40):
-        sim.step_once(sim.gas.substeps)
+        sim.advance(sim.gas.substeps)
     g, p = x_momentum(sim)
     assert 1e-8 < abs(g + p - p0) / scale < 1e-2  # measured 6.8e-4
 
@@ -178,7 +178,7 @@ def test_closed_periodic_box_with_unpaired_exchange_loses_momentum(tmp_path):
     sim = Simulation(box_case(tmp_path, "cell_beta"))
     scale = float(np.sum(sim.state.mass * np.abs(sim.state.velocity[:, 0])))
     g0, p0 = x_momentum(sim)
-    sim.step_once(40 * sim.gas.substeps)
+    sim.advance(40 * sim.gas.substeps)
     g, p = x_momentum(sim)
     assert abs(g + p - p0) / scale > 1e-6
 

@@ -152,7 +152,7 @@ def test_snapshots_list_the_particles_by_id(tiny_bed_case, tmp_path):
 
     case, _ = frictional_bed(tiny_bed_case, 40)
     sim = Simulation(case)
-    sim.step_once(1000)
+    sim.advance(1000)
     assert sim.engine.reorders > 0 and not np.array_equal(sim.state.ids, np.arange(sim.state.n))
     ParticleWriter(tmp_path, extra_fields={"radius_by_row": lambda s: s.state.radius})(sim)
     with h5py.File(tmp_path / "particles.h5") as f:

@@ -55,7 +55,8 @@ import numba
 import numpy as np
 
 from ..gas.solver import GasState
-from ..gas import _solver_kernels as SK
+from ..gas import _layout as GL
+from ..gas._operators import centre_to_x_faces, centre_to_y_faces
 from . import _exchange_kernels as K
 from . import _paired_kernels as P
 from . import interpolation as I
@@ -128,7 +129,7 @@ class GasCoupling:
         self._split = (self.options.drag_update == "substep" and self.exchange == "particle"
                        and hasattr(engine, "ext_damping"))
         ipar = self.solver._ipar
-        self._periodic = (bool(ipar[SK.I_PX]), bool(ipar[SK.I_PY]))
+        self._periodic = (bool(ipar[GL.I_PX]), bool(ipar[GL.I_PY]))
         gd = self.grid
         self._faces = tuple(np.zeros(gd.u_shape) for _ in range(2)) + tuple(np.zeros(gd.v_shape) for _ in range(2))
         self._kp = np.zeros(st.radius.shape)  # K_p of the "particle" exchange [kg/s]
@@ -398,8 +399,8 @@ class GasCoupling:
             bu, bv = beta
         else:
             bu, bv = np.empty(gd.u_shape), np.empty(gd.v_shape)
-            SK.centre_to_x_faces(beta, self._periodic[0], bu)
-            SK.centre_to_y_faces(beta, self._periodic[1], bv)
+            centre_to_x_faces(beta, self._periodic[0], bu)
+            centre_to_y_faces(beta, self._periodic[1], bv)
         if self.exchange == "particle":  # V_f (β_f u − β_f u_s,f) = A_f u − B_f whatever the face volumes
             au, bu_, av, bv_ = self._faces
             fu, fv = au * gs.u - bu_, av * gs.v - bv_
@@ -409,14 +410,14 @@ class GasCoupling:
                 _, su, _, sv = self._faces
             else:
                 su, sv = np.empty(gd.u_shape), np.empty(gd.v_shape)
-                SK.centre_to_x_faces(smap.solids_u, self._periodic[0], su)
-                SK.centre_to_y_faces(smap.solids_v, self._periodic[1], sv)
+                centre_to_x_faces(smap.solids_u, self._periodic[0], su)
+                centre_to_y_faces(smap.solids_v, self._periodic[1], sv)
             fu = gd.cell_volume * (bu * gs.u - bu * su)
             fv = gd.cell_volume * (bv * gs.v - bv * sv)
-        solved_u = self.solver.ukind == SK.SOLVED
-        solved_v = self.solver.vkind == SK.SOLVED
-        copy_u = self.solver.ukind == SK.COPY
-        copy_v = self.solver.vkind == SK.COPY
+        solved_u = self.solver.ukind == GL.SOLVED
+        solved_v = self.solver.vkind == GL.SOLVED
+        copy_u = self.solver.ukind == GL.COPY
+        copy_v = self.solver.vkind == GL.COPY
         gas = np.array([fu[solved_u].sum(), fv[solved_v].sum()])
         boundary = np.array([fu[~(solved_u | copy_u)].sum(), fv[~(solved_v | copy_v)].sum()])
         out = {"gas": gas, "boundary": boundary, "particles": drag[:, :2].sum(axis=0)}

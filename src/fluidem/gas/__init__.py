@@ -19,12 +19,12 @@ from .boundaries import (BoundaryCondition, FreeSlip, Inflow, Outflow, Periodic,
                          boundary_conditions)
 from .grid import (CORNER, FLAG_NAMES, FREE_SLIP, INFLOW, INTERIOR, NO_SLIP, OUTFLOW, PERIODIC, PRESSURE,
                    StaggeredGrid)
-from .solver import GasConvergenceError, GasProperties, GasSolver, GasState, StepInfo, gas_step_benchmark
+from .solver import GasConvergenceError, GasProperties, GasSolver, GasState, StepInfo
 from .schema import GasSection, GridSpec as Grid, PropertiesSpec as Properties  # the case's [gas] building blocks
 
 __all__ = [
     "GasSection", "Grid", "Properties", "StaggeredGrid", "GasProperties", "GasSolver", "GasState", "StepInfo", "GasConvergenceError",
-    "gas_step_benchmark", "BoundaryCondition", "Wall", "FreeSlip", "Inflow", "Segment", "Pulse", "Table", "PressureOutlet",
+    "BoundaryCondition", "Wall", "FreeSlip", "Inflow", "Segment", "Pulse", "Table", "PressureOutlet",
     "Outflow", "Periodic", "boundary_conditions", "INTERIOR", "FREE_SLIP", "NO_SLIP", "INFLOW", "PRESSURE",
     "OUTFLOW", "CORNER", "PERIODIC", "FLAG_NAMES",
 ]

@@ -34,11 +34,12 @@ The corrections are solved (``linear_solver``) by a compiled block-tridiagonal L
 up to 64 cells across (factors reused from step to step while the matrix changes little,
 and after a change factorised again only from the first changed line of cells, counted from
 the pressure outlet), by GMRES with an aggregation-multigrid preconditioner beyond (cost
-about proportional to the number of cells), by SciPy's SuperLU, or (``"pyamg"``, on request)
-by flexible GMRES preconditioned by an algebraic multigrid hierarchy of the pyamg library. One
-step is three compiled calls (``start_step``, ``iterate``, ``end_step``); the rest of
-``advance`` checks and classifies its inputs (with "pyamg" the iterations are a Python loop
-over the compiled pieces of ``iterate``, the linear solves in pyamg).
+about proportional to the number of cells), or by SciPy's SuperLU. One step is one compiled
+call (``_solver_kernels.step``; one more after each SuperLU factorisation, which SciPy makes);
+the rest of ``advance`` checks and classifies its inputs. The kernels' linear algebra is in
+``_linear_kernels.py`` (band LU, SuperLU factors) and ``_multigrid_kernels.py`` (set up by
+``_multigrid.py``); the slots of the solver's stacked arrays and the named tuples that group
+them for the kernels are in ``_layout.py``.
 
 Inside the solver the pressure is kept relative to ``reference_pressure``, so that
 gradients of a few Pa/m in 1e5 Pa keep their digits; ``GasState.p`` is absolute.
@@ -46,7 +47,6 @@ gradients of a few Pa/m in 1e5 Pa keep their digits; ``GasState.p`` is absolute.
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass
 from typing import Mapping
 
@@ -55,7 +55,10 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..errors import CaseError
+from . import _layout as lay
+from . import _linear_kernels as LK
 from . import _solver_kernels as K
+from ._multigrid import multigrid_arrays, no_multigrid
 from ._operators import TVD, UPWIND, centre_to_x_faces, centre_to_y_faces
 from .boundaries import BoundaryCondition
 from .grid import (FREE_SLIP, INFLOW, NO_SLIP, OUTFLOW, PERIODIC, PRESSURE, SIDES, StaggeredGrid,
@@ -66,13 +69,16 @@ _F64 = np.dtype(np.float64)
 SCHEMES = {"upwind": UPWIND, "tvd": TVD}
 SLOW_CONVERGENCE = 0.3  # refactorise the pressure matrix when an iteration cuts the residual by less than this
 BAND_MAX = 64  # band LU (compiled) up to this half-width; multigrid-preconditioned GMRES beyond
-LINEAR_SOLVERS = ("auto", "band", "multigrid", "superlu", "pyamg")
-SOLVER_PYAMG = 3  # ipar[K.I_SOLVER] of the pyamg path (Python loop; the kernels never see it)
+LINEAR_SOLVERS = ("auto", "band", "multigrid", "superlu")
+# names refused, with the reason: on the benchmark bed (``fluidem.bench.gas_step_benchmark``) pyamg's AMG-preconditioned
+# GMRES took 1.2 to 4 times as long per gas step as "multigrid" at 150 x 300 and 300 x 600 cells (2.6 to 3.5
+# times in the fastest of three repeats; 2.4 to 50 times on the smaller grids), with as many Krylov iterations
+REFUSED_SOLVERS = {"pyamg": "not offered: 'multigrid' (compiled GMRES with a grid multigrid) solves the same "
+                            "corrections faster on every grid measured, 15 x 25 to 300 x 600 cells"}
 KRYLOV_REDUCTION = 1e-4  # multigrid path: each correction solves the linear system to this fraction of its residual
 KRYLOV_RESTART = 30  # GMRES restart length
 KRYLOV_MAX = 300  # GMRES iterations of one correction before the multigrid path gives way to SuperLU
 COARSEST = 64  # cells of the coarsest multigrid level (dense LU) at most
-AMG_RATE = 0.1  # pyamg path: keep the hierarchy while FGMRES cuts the residual at least this much per iteration
 
 
 def _ready(a, shape) -> bool:
@@ -80,15 +86,10 @@ def _ready(a, shape) -> bool:
     return type(a) is np.ndarray and a.shape == shape and a.dtype == _F64 and a.flags.c_contiguous
 
 
-def _import_pyamg():
-    """The pyamg module, or the CaseError of ``linear_solver = "pyamg"`` without it."""
-    try:
-        import pyamg
-        import pyamg.krylov  # noqa: F401
-    except ImportError as err:
-        raise CaseError(f"gas.linear_solver = 'pyamg': the pyamg package is not installed ({err}); "
-                        "pip install pyamg, or use 'multigrid' or 'superlu'") from None
-    return pyamg
+def _refused(name: str) -> CaseError:
+    """The CaseError of a ``linear_solver`` name in ``REFUSED_SOLVERS``."""
+    return CaseError(f"gas.linear_solver = {name!r}: {REFUSED_SOLVERS[name]}; allowed are "
+                     + ", ".join(repr(k) for k in LINEAR_SOLVERS))
 
 
 def _show(value) -> str:
@@ -246,9 +247,8 @@ class GasSolver:
         slower but skip the factorisation. 0 refactorises whenever anything changed.
         The band factorises again only the blocks (lines of cells) from the first one
         whose rows changed by more than 0.3 times this fraction. Not used by multigrid,
-        which makes its hierarchy anew every iteration, nor by pyamg, which solves with the
-        current matrix and keeps its hierarchy (a preconditioner) while it works well.
-    linear_solver : {"auto", "band", "multigrid", "superlu", "pyamg"}
+        which makes its hierarchy anew every iteration.
+    linear_solver : {"auto", "band", "multigrid", "superlu"}
         Solution of the pressure-correction equations: "band", a compiled band LU without
         pivoting (the matrix is diagonally dominant; the unknowns are numbered along the
         shorter or the periodic direction first, so the half-width is min(nx, ny));
@@ -257,14 +257,8 @@ class GasSolver:
         at ``tolerance``), for large grids; "superlu", SciPy's SuperLU with its factors
         applied by compiled triangular solves. "auto": the band up to a half-width of 64
         cells unless both directions are periodic, multigrid beyond. Band and multigrid
-        give way to SuperLU if they fail (a poor pivot, a stalled GMRES). "pyamg" (needs
-        the pyamg package; not chosen by "auto", slower than "multigrid" on the benchmark
-        beds): pyamg's flexible GMRES on the current matrix, preconditioned by a classical
-        (Ruge-Stüben) algebraic multigrid V-cycle, each correction solved to the residual
-        of "multigrid"; the hierarchy is kept over iterations and steps until GMRES with it
-        slows down (see ``_iterate_pyamg``); a CaseError naming the key if pyamg is missing
-        or fails. Its vector operations go through NumPy's BLAS: on a few shared cores,
-        OPENBLAS_NUM_THREADS=1 made it about six times faster at 150 x 300.
+        give way to SuperLU if they fail (a poor pivot, a stalled GMRES). "pyamg" is
+        refused (``REFUSED_SOLVERS``).
 
     Examples
     --------
@@ -297,12 +291,13 @@ class GasSolver:
             raise CaseError(f"gas.max_iterations = {max_iterations!r}: must be an integer >= 1")
         if not (0.0 <= jacobian_reuse < 1.0):
             raise CaseError(f"gas.jacobian_reuse = {jacobian_reuse!r}: must be in [0, 1)")
+        if linear_solver in REFUSED_SOLVERS:
+            raise _refused(linear_solver)
         if linear_solver not in LINEAR_SOLVERS:
             raise CaseError(f"gas.linear_solver = {linear_solver!r}: allowed are "
                             + ", ".join(repr(k) for k in LINEAR_SOLVERS))
         if linear_solver == "band" and all(boundaries[s].flag == PERIODIC for s in SIDES):
             raise CaseError("gas.linear_solver = 'band': not with periodic sides in both directions; use 'superlu'")
-        self._pyamg = _import_pyamg() if linear_solver == "pyamg" else None
         self._linear_solver = linear_solver
         self.grid, self.props = grid, props
         self.boundaries = dict(boundaries)
@@ -321,31 +316,35 @@ class GasSolver:
         self._setup_matrix()
         self._setup_work()
         self._set_boundary_values(0.0)
-        self.C[K.C_PFIX_OLD] = self.C[K.C_PFIX]
+        self.C[lay.C_PFIX_OLD] = self.C[lay.C_PFIX]
         self._shapes = (grid.shape, grid.u_shape, grid.v_shape)
-        self._state_ok = None  # the state arrays _check_state found right
-        self._set_iterate_args()
+        self._state_arrays = None  # the state arrays _check_state found right (a lay.StateArrays, and as a tuple)
+        self._state_tuple = ()
+        self._fields = lay.Fields(self.U, self.V, self.G, self.H, self.C, self.FU, self.FV, self.TAU)
+        self._bnd = lay.Boundaries(self.flags, self.KU, self.KV, self.RULES, self.row_of)
+        self._system = lay.PressureSystem(self.MAT, self.VEC, self._csc_indices, self._csc_indptr, self.diag_pos,
+                                          self.upos, self.vpos, self.pin_pos)
+        self._band_factors = lay.BandFactors(self._band, self._band_lu, self._order, self._band_place, self._csc_block)
+        self._set_groups()
 
-    def _set_iterate_args(self):
-        """The arguments of ``K.iterate``, all persistent arrays (the SuperLU factors change in ``_factorise``)."""
-        self._iterate_args = (self.U, self.V, self.C, self.FU, self.FV, self.KU, self.KV, self.row_of, self.flags,
-                              self.RULES, self.VEC, self.MAT, self.diag_pos, self.upos, self.vpos, self.pin_pos,
-                              *self._factors, self._band, self._band_lu, self._order, self._band_place, self._csc_indices,
-                              self._csc_indptr, self._csc_block, self._csc_ell, *self._mg, self._fpar, self._ipar,
-                              self._out)
+    def _set_groups(self):
+        """The grouped arrays of ``K.step`` after the inputs, as plain tuples (see ``K.step``), all persistent
+        (the SuperLU factors change in ``_factorise`` and ``restore_factors``)."""
+        self._groups = tuple(tuple(g) for g in (self._fields, self._bnd, self._system, self._factors,
+                                                self._band_factors, self._mg))
 
     # ------------------------------------------------------------ set-up
     def _setup_faces(self):
         """Face kinds, inward signs and fixed-value weights from the flags."""
         nx, ny, fl = self.grid.nx, self.grid.ny, self.flags
-        kind_of_ghost = {FREE_SLIP: K.FIXED, NO_SLIP: K.FIXED, INFLOW: K.FIXED, PRESSURE: K.SOLVED,
-                         OUTFLOW: K.OUTFLOW_FACE, PERIODIC: K.SOLVED}
+        kind_of_ghost = {FREE_SLIP: lay.FIXED, NO_SLIP: lay.FIXED, INFLOW: lay.FIXED, PRESSURE: lay.SOLVED,
+                         OUTFLOW: lay.OUTFLOW_FACE, PERIODIC: lay.SOLVED}
 
         def kinds(n_faces_along, n_across, ghost_lo, ghost_hi):
-            kind = np.full((n_faces_along, n_across), K.SOLVED, np.int8)
+            kind = np.full((n_faces_along, n_across), lay.SOLVED, np.int8)
             sign = np.zeros((n_faces_along, n_across), np.int8)
             kind[0] = [kind_of_ghost[int(f)] for f in ghost_lo]
-            kind[-1] = [K.COPY if f == PERIODIC else kind_of_ghost[int(f)] for f in ghost_hi]
+            kind[-1] = [lay.COPY if f == PERIODIC else kind_of_ghost[int(f)] for f in ghost_hi]
             sign[0] = np.where(ghost_lo == PERIODIC, 0, 1)
             sign[-1] = np.where(ghost_hi == PERIODIC, 0, -1)
             return kind, sign
@@ -354,8 +353,8 @@ class GasSolver:
         vk, vs = kinds(ny + 1, nx, fl[1:-1, 0], fl[1:-1, -1])
         self.KU = np.stack([uk, us])  # K_KIND, K_SIGN
         self.KV = np.ascontiguousarray(np.stack([vk.T, vs.T]))
-        self.ukind, self.ubnd = self.KU[K.K_KIND], self.KU[K.K_SIGN]
-        self.vkind, self.vbnd = self.KV[K.K_KIND], self.KV[K.K_SIGN]
+        self.ukind, self.ubnd = self.KU[lay.K_KIND], self.KU[lay.K_SIGN]
+        self.vkind, self.vbnd = self.KV[lay.K_KIND], self.KV[lay.K_SIGN]
         # sides with a prescribed normal velocity: t -> velocity of each boundary face (BoundaryCondition)
         self._inflows = []
         for side in SIDES:
@@ -384,18 +383,18 @@ class GasSolver:
         self.row_of, self.col_of = row, col
         # ghost rules of centre scalars, indexed by flag
         self.RULES = np.zeros((2, 9), np.int64)
-        self.prule, self.erule = self.RULES[K.RULE_P], self.RULES[K.RULE_E]
+        self.prule, self.erule = self.RULES[lay.RULE_P], self.RULES[lay.RULE_E]
         for f in (FREE_SLIP, NO_SLIP, INFLOW, OUTFLOW):
-            self.prule[f] = K.R_COPY
-        self.prule[PRESSURE] = K.R_FIXED
-        self.prule[PERIODIC] = K.R_WRAP
+            self.prule[f] = lay.R_COPY
+        self.prule[PRESSURE] = lay.R_FIXED
+        self.prule[PERIODIC] = lay.R_WRAP
         for f in (FREE_SLIP, NO_SLIP, PRESSURE, OUTFLOW):
-            self.erule[f] = K.R_COPY  # Hoomans 1996 §3.5: wall cells copy the adjacent voidage
-        self.erule[INFLOW] = K.R_FIXED  # Hoomans 1996 §3.5: fixed voidage in influx cells
-        self.erule[PERIODIC] = K.R_WRAP
-        self.C = np.zeros((K.N_C, nx + 2, ny + 2))  # stacked centre arrays, slots K.C_*
-        self.P, self.RHO, self.E = self.C[K.C_P], self.C[K.C_RHO], self.C[K.C_E]
-        self.pfix, self.efix = self.C[K.C_PFIX], self.C[K.C_EFIX]
+            self.erule[f] = lay.R_COPY  # Hoomans 1996 §3.5: wall cells copy the adjacent voidage
+        self.erule[INFLOW] = lay.R_FIXED  # Hoomans 1996 §3.5: fixed voidage in influx cells
+        self.erule[PERIODIC] = lay.R_WRAP
+        self.C = np.zeros((lay.N_C, nx + 2, ny + 2))  # stacked centre arrays, slots lay.C_*
+        self.P, self.RHO, self.E = self.C[lay.C_P], self.C[lay.C_RHO], self.C[lay.C_E]
+        self.pfix, self.efix = self.C[lay.C_PFIX], self.C[lay.C_EFIX]
         self.efix[:] = 1.0
         for side, bc in self.boundaries.items():
             if bc.flag == INFLOW:
@@ -412,7 +411,7 @@ class GasSolver:
         rr, cr = self.row_of[right], self.col_of[right]
         rows = np.stack([rl, rl, rr, rr], axis=-1)
         cols = np.stack([cl, cr, cl, cr], axis=-1)
-        valid = (rows >= 0) & (cols >= 0) & (kind != K.COPY)[..., None]
+        valid = (rows >= 0) & (cols >= 0) & (kind != lay.COPY)[..., None]
         return rows, cols, valid
 
     def _setup_matrix(self):
@@ -430,7 +429,7 @@ class GasSolver:
         self._indices = (keys % n).astype(np.int32)
         self._indptr = np.searchsorted(keys, np.arange(n + 1) * n).astype(np.int32)
         self.MAT = np.zeros((2, keys.size))  # M_DATA, M_FACTORED
-        self._data, self._lu_data = self.MAT[K.M_DATA], self.MAT[K.M_FACTORED]
+        self._data, self._lu_data = self.MAT[lay.M_DATA], self.MAT[lay.M_FACTORED]
 
         def pos(r, c, valid):
             p = np.searchsorted(keys, c * n + r)
@@ -452,31 +451,33 @@ class GasSolver:
         nx, ny = self.grid.nx, self.grid.ny
         self.U, self.G = np.zeros((nx + 5, ny + 4)), np.zeros((nx + 5, ny + 4))
         self.V, self.H = np.zeros((nx + 4, ny + 5)), np.zeros((nx + 4, ny + 5))
-        self.FU = np.zeros((K.N_F,) + self.grid.u_shape)  # stacked x-face arrays, slots K.F_*
-        self.FV = np.zeros((K.N_F,) + self.grid.v_shape)
-        self.exu, self.exv = self.FU[K.F_EX], self.FV[K.F_EX]
-        self.ufix, self.vfix = self.FU[K.F_FIX], self.FV[K.F_FIX]
-        self.wout_u, self.wout_v = self.FU[K.F_WOUT], self.FV[K.F_WOUT]
+        self.FU = np.zeros((lay.N_F,) + self.grid.u_shape)  # stacked x-face arrays, slots lay.F_*
+        self.FV = np.zeros((lay.N_F,) + self.grid.v_shape)
+        self.exu, self.exv = self.FU[lay.F_EX], self.FV[lay.F_EX]
+        self.ufix, self.vfix = self.FU[lay.F_FIX], self.FV[lay.F_FIX]
+        self.wout_u, self.wout_v = self.FU[lay.F_WOUT], self.FV[lay.F_WOUT]
         self.TAU = np.zeros((nx + 1, ny + 1))  # shear stresses at the corners (work)
         n = nx * ny
-        self.VEC = np.zeros((K.N_VEC, n))  # V_R, V_DP, V_WORK, V_WORK2, V_ROW
-        self.R = self.VEC[K.V_R]
-        self._factors = (np.zeros((4, n + 1), np.int64), np.zeros(1, np.int64), np.zeros(1), np.zeros(1, np.int64),
-                         np.zeros(1), np.ones(n))  # LUI, Li, Lx, Ui, Ux, Ud: none yet
+        self.VEC = np.zeros((lay.N_VEC, n))  # slots lay.V_*
+        self.R = self.VEC[lay.V_R]
+        self._factors = lay.LUFactors(np.zeros((4, n + 1), np.int64), np.zeros(1, np.int64), np.zeros(1),
+                                      np.zeros(1, np.int64), np.zeros(1), np.ones(n))  # none yet
         gd = self.grid
-        self._fpar = np.zeros(K.N_FPAR)
-        self._fpar[K.F_MU] = self.props.viscosity
-        self._fpar[K.F_PREF] = self.props.reference_pressure
-        self._fpar[[K.F_GX, K.F_GY, K.F_DX, K.F_DY, K.F_AX, K.F_AY, K.F_VOL]] = (
+        self._fpar = np.zeros(lay.N_FPAR)
+        self._fpar[lay.FP_MU] = self.props.viscosity
+        self._fpar[lay.FP_PREF] = self.props.reference_pressure
+        self._fpar[[lay.FP_GX, lay.FP_GY, lay.FP_DX, lay.FP_DY, lay.FP_AX, lay.FP_AY, lay.FP_VOL]] = (
             self.gravity[0], self.gravity[1], gd.dx, gd.dy, gd.area_x, gd.area_y, gd.cell_volume)
-        self._fpar[K.F_COMP] = self.props.compressibility
-        self._fpar[K.F_RHOC] = 0.0 if self.props.ideal else float(self.props.density)
-        self._fpar[K.F_TOL] = self.tolerance
-        self._fpar[K.F_REUSE] = self.jacobian_reuse
-        self._fpar[K.F_SLOW] = SLOW_CONVERGENCE
-        self._fpar[K.F_ETA] = KRYLOV_REDUCTION
-        self._ipar = np.zeros(K.N_IPAR, np.int64)
-        self._ipar[[K.I_NX, K.I_NY, K.I_MAXIT, K.I_PIN, K.I_SCHEME, K.I_KRYLOV_MAX, K.I_RESTART, K.I_PX, K.I_PY]] = (
+        self._fpar[lay.FP_COMP] = self.props.compressibility
+        self._fpar[lay.FP_RHOC] = 0.0 if self.props.ideal else float(self.props.density)
+        self._fpar[lay.FP_TOL] = self.tolerance
+        self._fpar[lay.FP_REUSE] = self.jacobian_reuse
+        self._fpar[lay.FP_SLOW] = SLOW_CONVERGENCE
+        self._fpar[lay.FP_ETA] = KRYLOV_REDUCTION
+        self._fpar[lay.FP_SQRT_TOL] = self._sqrt_tolerance
+        self._ipar = np.zeros(lay.N_IPAR, np.int64)
+        self._ipar[[lay.I_NX, lay.I_NY, lay.I_MAXIT, lay.I_PIN, lay.I_SCHEME, lay.I_KRYLOV_MAX, lay.I_RESTART,
+                    lay.I_PX, lay.I_PY]] = (
             nx, ny, self.max_iterations, self.pin_diag, SCHEMES[self.convection], KRYLOV_MAX, KRYLOV_RESTART,
             self.periodic_x, self.periodic_y)
         # band (block-tridiagonal) LU: number the unknowns along the shorter direction first (along the
@@ -496,15 +497,20 @@ class GasSolver:
         choice = self._linear_solver
         if choice == "auto":
             choice = "band" if bw <= BAND_MAX and not both_periodic else "multigrid"
-        solver = {"band": K.SOLVER_BAND, "multigrid": K.SOLVER_MULTIGRID, "superlu": K.SOLVER_SUPERLU,
-                  "pyamg": SOLVER_PYAMG}[choice]
-        if solver == K.SOLVER_MULTIGRID and not self._setup_multigrid():
-            solver = K.SOLVER_SUPERLU
-        if solver != K.SOLVER_MULTIGRID:
-            self._no_multigrid()
-        self._ipar[K.I_SOLVER] = solver
-        self._ipar[K.I_BW] = bw
-        banded = solver == K.SOLVER_BAND
+        solver = {"band": lay.SOLVER_BAND, "multigrid": lay.SOLVER_MULTIGRID, "superlu": lay.SOLVER_SUPERLU}[choice]
+        self._mg = None
+        if solver == lay.SOLVER_MULTIGRID:
+            self._mg = multigrid_arrays(nx, ny, self.periodic_x, self.periodic_y, self._indices, self._indptr, COARSEST,
+                                        KRYLOV_RESTART)
+            if self._mg is None:
+                solver = lay.SOLVER_SUPERLU
+            else:
+                self._ipar[lay.I_LEVELS] = self._mg.MGL.shape[1] - 1
+        if self._mg is None:
+            self._mg = no_multigrid()
+        self._ipar[lay.I_SOLVER] = solver
+        self._ipar[lay.I_BW] = bw
+        banded = solver == lay.SOLVER_BAND
         # block-tridiagonal LU; each block's rows padded with zeros to a multiple of 4 entries where the
         # work rows (n long) hold them: the elimination's row operations then fill whole vectors
         bwp = -(-bw // 4) * 4
@@ -514,100 +520,12 @@ class GasSolver:
         self._csc_indptr = self._indptr.astype(np.int64)
         self._csc_block = self._order[self._csc_indices] // bw  # band: block of each matrix entry's row
         self._band_place = np.stack([self._order // bw, self._order % bw])  # band: block and place of each unknown
-        self._out = np.zeros(9)
-        if solver == SOLVER_PYAMG:
-            self._setup_pyamg()
-        # step inputs: modes (K.IN_*), a 1 x 1 array per input for numbers, an empty array for none
-        self._modes = np.zeros(6, np.int64)
-        self._scalars = np.zeros((6, 1, 1))
+        self._out = np.zeros(lay.N_OUT)
+        # step inputs: how each is given (lay.MODE_* in slots lay.IN_*), a 1 x 1 array per input for numbers,
+        # an empty array for none
+        self._modes = np.zeros(lay.N_IN, np.int64)
+        self._scalars = np.zeros((lay.N_IN, 1, 1))
         self._none = np.zeros((0, 0))
-
-    def _no_multigrid(self):
-        self._csc_ell = np.zeros(1, np.int64)
-        self._mg = (np.zeros((3, 2), np.int64), np.zeros((1, 9), np.int64), np.zeros((1, 5)), np.zeros((4, 1)),
-                    np.zeros((1, 1)), np.zeros(1, np.int64), np.zeros((2, 1)), np.zeros((4, 1)))
-
-    def _setup_pyamg(self):
-        """The pyamg path: the pressure matrix as CSR (its data gathered from the CSC data through
-        ``_amg_gather``), no hierarchy yet."""
-        n = self.grid.nx * self.grid.ny
-        nnz = self._indices.size
-        pattern = sp.csc_matrix((np.arange(nnz, dtype=float), self._indices, self._indptr), shape=(n, n)).tocsr()
-        pattern.sort_indices()
-        self._amg_gather = pattern.data.astype(np.int64)  # CSR entry k is CSC entry _amg_gather[k]
-        self._amg_A = sp.csr_matrix((np.zeros(nnz), pattern.indices.copy(), pattern.indptr.copy()), shape=(n, n))
-        self._amg_ml = None  # hierarchy (pyamg MultilevelSolver) of the matrix in self._lu_data
-        self._amg_M = None  # its V-cycle as a preconditioner
-        self._amg_rate0 = None  # residual reduction per FGMRES iteration of the first solve with it
-        self._amg_stale = False  # a later solve converged much slower: make it anew
-
-    @staticmethod
-    def _grid_neighbours(a, b, px, py):
-        """(a b, 4) neighbours -x, +x, -y, +y of the cells i b + j of an a × b grid (-1: none or itself)."""
-        I, J = np.meshgrid(np.arange(a), np.arange(b), indexing="ij")
-        me = (I * b + J).ravel()
-        out = np.empty((a * b, 4), np.int64)
-        for d, (di, dj) in enumerate(((-1, 0), (1, 0), (0, -1), (0, 1))):
-            i2, j2 = I + di, J + dj
-            if px:
-                i2 = i2 % a
-            if py:
-                j2 = j2 % b
-            ok = ((i2 >= 0) & (i2 < a) & (j2 >= 0) & (j2 < b)).ravel()
-            k = (i2 * b + j2).ravel()
-            out[:, d] = np.where(ok & (k != me), k, -1)
-        return out
-
-    def _setup_multigrid(self) -> bool:
-        """The multigrid levels (see ``_solver_kernels``: MGL, MGI, ...) and the map of the CSC entries of
-        the pressure matrix to its rows; False if the matrix pattern is not the grid's 5-point one."""
-        nx, ny, px, py = self.grid.nx, self.grid.ny, self.periodic_x, self.periodic_y
-        dims = [(nx, ny)]
-        while dims[-1][0] * dims[-1][1] > COARSEST:
-            a, b = dims[-1]
-            dims.append(((a + 1) // 2, (b + 1) // 2))
-        sizes = [a * b for a, b in dims]
-        offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
-        MGI = np.full((int(offsets[-1]), 9), -1, np.int64)
-        nbs = [self._grid_neighbours(a, b, px, py) for a, b in dims]
-        for l, (a, b) in enumerate(dims):
-            rows = slice(offsets[l], offsets[l + 1])
-            MGI[rows, K.MGI_NB:K.MGI_NB + 4] = nbs[l]
-            if l + 1 == len(dims):
-                break
-            bc = dims[l + 1][1]
-            I, J = np.meshgrid(np.arange(a), np.arange(b), indexing="ij")
-            agg = ((I // 2) * bc + J // 2).ravel()
-            MGI[rows, K.MGI_AGG] = agg
-            for d in range(4):
-                c = nbs[l][:, d]
-                has = c >= 0
-                ic, jc = agg, agg[np.where(has, c, 0)]
-                same = ic == jc
-                if np.any(has & ~same & (nbs[l + 1][ic, d] != jc)):
-                    return False  # cannot happen on a rectangular grid
-                MGI[rows, K.MGI_GAL + d] = np.where(has, (offsets[l + 1] + ic) * 5 + np.where(same, 0, d + 1), -1)
-        # CSC entries of the finest level -> (row, slot)
-        n = nx * ny
-        rows = self._indices.astype(np.int64)
-        cols = np.repeat(np.arange(n, dtype=np.int64), np.diff(self._indptr))
-        slot = np.full(rows.size, -1, np.int64)
-        slot[rows == cols] = 0
-        for d in range(3, -1, -1):  # the first matching direction wins
-            slot = np.where((rows != cols) & (nbs[0][rows, d] == cols), d + 1, slot)
-        if np.any(slot < 0):
-            return False
-        self._csc_ell = rows * 5 + slot
-        m = sizes[-1]
-        MGL = np.zeros((3, len(dims) + 1), np.int64)
-        MGL[0] = offsets
-        MGL[1, :-1] = [a for a, _ in dims]
-        MGL[2, :-1] = [b for _, b in dims]
-        N = int(offsets[-1])
-        self._mg = (MGL, MGI, np.zeros((N, 5)), np.zeros((4, N)), np.zeros((m, m)), np.zeros(m, np.int64),
-                    np.zeros((2 * (KRYLOV_RESTART + 1), n)), np.zeros((KRYLOV_RESTART + 4, KRYLOV_RESTART + 1)))
-        self._ipar[K.I_LEVELS] = len(dims)
-        return True
 
     # ------------------------------------------------------------ boundary values
     def _set_boundary_values(self, t: float) -> None:
@@ -684,7 +602,7 @@ class GasSolver:
         if not np.all(p > 0.0) and self.props.ideal:
             raise CaseError("gas initial pressure: must be > 0 [Pa] everywhere for the ideal gas")
         self._set_boundary_values(t)
-        fixed_u, fixed_v = self.ukind == K.FIXED, self.vkind == K.FIXED
+        fixed_u, fixed_v = self.ukind == lay.FIXED, self.vkind == lay.FIXED
         u[fixed_u] = self.ufix[fixed_u]
         v[fixed_v] = self.vfix[fixed_v]
         if self.periodic_x:
@@ -729,13 +647,14 @@ class GasSolver:
             bad = float(eps[~((eps > 0.0) & (eps <= 1.0))].ravel()[0])
             raise CaseError(f"gas voidage: value {bad!r} outside (0, 1]")
 
-    def _check_state(self, state: GasState) -> None:
-        """Shapes, dtype and layout of the state's arrays; arrays found right once are remembered
-        (references) and not checked again while the state holds the same objects."""
-        ok = self._state_ok
-        if ok is not None and ok[0] is state.p and ok[1] is state.rho and ok[2] is state.voidage \
-                and ok[3] is state.u and ok[4] is state.v:
-            return
+    def _check_state(self, state: GasState) -> tuple:
+        """Shapes, dtype and layout of the state's arrays, returned as the tuple of ``lay.StateArrays`` for
+        ``K.step``; arrays found right once are remembered (references) and not checked again while the
+        state holds the same objects."""
+        ok = self._state_arrays
+        if ok is not None and ok.p is state.p and ok.rho is state.rho and ok.voidage is state.voidage \
+                and ok.u is state.u and ok.v is state.v:
+            return self._state_tuple
         c, fu, fv = self._shapes
         for key, shape in (("p", c), ("rho", c), ("voidage", c), ("u", fu), ("v", fv)):
             a = getattr(state, key, None)
@@ -745,7 +664,9 @@ class GasSolver:
             if a.dtype != np.float64 or not a.flags.c_contiguous:
                 raise CaseError(f"gas state.{key}: must be a C-contiguous float64 array (as initial_state makes it), "
                                 f"not {a.dtype} {'contiguous' if a.flags.c_contiguous else 'strided'}")
-        self._state_ok = (state.p, state.rho, state.voidage, state.u, state.v)
+        self._state_arrays = lay.StateArrays(state.p, state.rho, state.u, state.v, state.voidage)
+        self._state_tuple = tuple(self._state_arrays)
+        return self._state_tuple
 
     # ------------------------------------------------------------ time step
     def advance(self, state: GasState, dt: float, t: float = 0.0, *, voidage=None, beta=None, solids_u=None,
@@ -793,68 +714,60 @@ class GasSolver:
         c_shape, su, sv = self._shapes
         if not (isinstance(dt, (int, float, np.floating)) and math.isfinite(dt) and dt > 0.0):
             raise CaseError(f"gas time step dt = {_show(dt)}: must be > 0 [s]")
-        self._check_state(state)
+        st = self._check_state(state)
         modes = self._modes
         if voidage is None:
             eps_new = state.voidage
-            modes[K.IN_VOIDAGE] = K.IN_NONE
+            modes[lay.IN_VOIDAGE] = lay.MODE_NONE
         else:
             eps_new = voidage
             if not _ready(eps_new, c_shape):
                 eps_new = np.ascontiguousarray(self._centre_array("voidage", voidage), dtype=float)
-            modes[K.IN_VOIDAGE] = K.IN_CENTRE
+            modes[lay.IN_VOIDAGE] = lay.MODE_CENTRE
         if isinstance(solids_u, (tuple, list)) or isinstance(solids_v, (tuple, list)):
             raise CaseError("gas solids_u / solids_v: give one array each (faces or centres), not a pair")
         if isinstance(beta, (tuple, list)) and len(beta) == 2:
             bu, bv = (b if _ready(b, shape) else
                       np.ascontiguousarray(self._face_array(f"beta[{k}]", b, shape, centre_ok=False), dtype=float)
                       for k, (b, shape) in enumerate(zip(beta, (su, sv))))
-            modes[K.IN_BETA] = K.IN_FACE
+            modes[lay.IN_BETA] = lay.MODE_FACE
         else:
-            modes[K.IN_BETA], bu = self._input("beta", beta, su, K.IN_BETA)
+            modes[lay.IN_BETA], bu = self._input("beta", beta, su, lay.IN_BETA)
             bv = bu
-            if modes[K.IN_BETA] == K.IN_FACE:
+            if modes[lay.IN_BETA] == lay.MODE_FACE:
                 self._face_array("beta", bu, sv)  # raises: one face array cannot serve both directions
-        modes[K.IN_SOLIDS_U], us = self._input("solids_u", solids_u, su, K.IN_SOLIDS_U)
-        modes[K.IN_SOLIDS_V], vs = self._input("solids_v", solids_v, sv, K.IN_SOLIDS_V)
-        modes[K.IN_SOURCE_U], qu = self._input("source_u", source_u, su, K.IN_SOURCE_U)
-        modes[K.IN_SOURCE_V], qv = self._input("source_v", source_v, sv, K.IN_SOURCE_V)
-        self._ipar[K.I_PRESSURE_VOIDAGE] = 0 if pressure_voidage is None else self._load_pressure_voidage(
+        modes[lay.IN_SOLIDS_U], us = self._input("solids_u", solids_u, su, lay.IN_SOLIDS_U)
+        modes[lay.IN_SOLIDS_V], vs = self._input("solids_v", solids_v, sv, lay.IN_SOLIDS_V)
+        modes[lay.IN_SOURCE_U], qu = self._input("source_u", source_u, su, lay.IN_SOURCE_U)
+        modes[lay.IN_SOURCE_V], qv = self._input("source_v", source_v, sv, lay.IN_SOURCE_V)
+        self._ipar[lay.I_PRESSURE_VOIDAGE] = 0 if pressure_voidage is None else self._load_pressure_voidage(
             pressure_voidage, su, sv)
         if self._time_dependent:  # prescribed pressures at t and t + dt, inflow velocities at t + dt
             if t != self._bc_time:
                 self._set_boundary_values(t)
-            self.C[K.C_PFIX_OLD] = self.C[K.C_PFIX]
+            self.C[lay.C_PFIX_OLD] = self.C[lay.C_PFIX]
             self._set_boundary_values(t + dt)
         fpar, ipar, out = self._fpar, self._ipar, self._out
-        U, V = self.U, self.V
-        bad = K.start_step(float(dt), state.p, state.rho, state.u, state.v, state.voidage, eps_new, bu, bv, us, vs, qu,
-                           qv, modes, U, V, self.G, self.H, self.C, self.FU, self.FV, self.KU, self.KV, self.flags,
-                           self.RULES, fpar, ipar, out, self.TAU)
-        if bad == K.BAD_VOIDAGE:
+        dt = float(dt)
+        # the whole step in one compiled call, again after each SuperLU factorisation
+        status = K.step(False, dt, st, eps_new, bu, bv, us, vs, qu, qv, modes, *self._groups, fpar, ipar, out)
+        while status == lay.NEED_FACTORS:
+            self._factorise()
+            status = K.step(True, dt, st, eps_new, bu, bv, us, vs, qu, qv, modes, *self._groups, fpar, ipar, out)
+        if status == lay.BAD_VOIDAGE:
             self._check_voidage(eps_new)
-        if bad == K.BAD_BETA:
+        if status == lay.BAD_BETA:
             raise CaseError("gas beta: must be finite and >= 0 [kg m^-3 s^-1] on every face")
-        if self._pyamg is not None:
-            status = self._iterate_pyamg()
-        else:
-            while True:
-                status = K.iterate(*self._iterate_args)
-                if status == K.NEED_FACTORS:
-                    self._factorise()
-                    continue
-                break
         o = out.tolist()
-        rel = o[K.O_REL]
-        if status == K.NOT_FINITE or rel > self._sqrt_tolerance:
-            what = "is not finite" if status == K.NOT_FINITE else f"did not converge (mass residual {rel:.3g})"
+        rel = o[lay.O_REL]
+        if status == lay.NOT_FINITE or rel > self._sqrt_tolerance:  # ``K.step`` left the state as it was
+            what = "is not finite" if status == lay.NOT_FINITE else f"did not converge (mass residual {rel:.3g})"
             raise GasConvergenceError(
-                f"gas step from t = {t:.6g} s with dt = {dt:g} s {what}; Courant number {o[K.O_COURANT]:.3g}: "
+                f"gas step from t = {t:.6g} s with dt = {dt:g} s {what}; Courant number {o[lay.O_COURANT]:.3g}: "
                 "keep it below 1 (0.5 with convection='tvd'), see GasSolver.max_time_step")
-        K.end_step(state.p, state.rho, state.u, state.v, U, V, self.C, self._p_ref, state.voidage, eps_new)
-        return StepInfo(iterations=int(ipar[K.I_ITER]), mass_residual=rel, converged=rel <= self.tolerance,
-                        inflow_rate=o[K.O_IN], outflow_rate=o[K.O_OUT], mass=o[K.O_MASS],
-                        mass_change_rate=o[K.O_ACC], courant=o[K.O_COURANT])
+        return StepInfo(iterations=int(ipar[lay.I_ITER]), mass_residual=rel, converged=rel <= self.tolerance,
+                        inflow_rate=o[lay.O_IN], outflow_rate=o[lay.O_OUT], mass=o[lay.O_MASS],
+                        mass_change_rate=o[lay.O_ACC], courant=o[lay.O_COURANT])
 
     def _load_pressure_voidage(self, value, su, sv) -> int:
         """Copy the (x-face, y-face) pair ``pressure_voidage`` into the face stacks; CaseError if wrong."""
@@ -874,125 +787,23 @@ class GasSolver:
         return 1
 
     def _input(self, name, value, face_shape, slot, centre_ok=True):
-        """(mode, array) of a step input for ``K.load_inputs``: K.IN_NONE, IN_SCALAR (the number in a
-        1 × 1 array), IN_CENTRE or IN_FACE with a C-contiguous float64 array; a CaseError for a wrong shape."""
+        """(mode, array) of a step input for ``K.load_inputs``: lay.MODE_NONE, MODE_SCALAR (the number in a
+        1 × 1 array), MODE_CENTRE or MODE_FACE with a C-contiguous float64 array; a CaseError for a wrong shape."""
         if value is None:
-            return K.IN_NONE, self._none
+            return lay.MODE_NONE, self._none
         a = value if type(value) is np.ndarray else np.asarray(value, float)
         if a.ndim == 0:
             buf = self._scalars[slot]
             buf[0, 0] = a
-            return K.IN_SCALAR, buf
+            return lay.MODE_SCALAR, buf
         if a.dtype != _F64 or not a.flags.c_contiguous:
             a = np.ascontiguousarray(a, dtype=float)
         if a.shape == face_shape:
-            return K.IN_FACE, a
+            return lay.MODE_FACE, a
         if centre_ok and a.shape == self._shapes[0]:
-            return K.IN_CENTRE, a
+            return lay.MODE_CENTRE, a
         self._face_array(name, a, face_shape, centre_ok)  # raises the CaseError of a wrong shape
         raise AssertionError("unreachable")
-
-    def _iterate_pyamg(self) -> int:
-        """``K.iterate`` for the pyamg path: the same Newton iterations from the same compiled pieces
-        (residual, the current Jacobian, p += p'), with p' from pyamg's flexible GMRES on the current
-        matrix, preconditioned by an algebraic multigrid V-cycle, to the residual target of the
-        multigrid path, max(KRYLOV_REDUCTION ||R||, tolerance q_ref / (10 √n)). The hierarchy is only a
-        preconditioner: it is kept from iteration to iteration and step to step while FGMRES with it
-        reduces the residual per iteration by a factor of at most max(AMG_RATE, √(its factor when new)),
-        and made anew otherwise (or when KRYLOV_MAX iterations were not enough with an older one)."""
-        nx, ny = self.grid.nx, self.grid.ny
-        n = nx * ny
-        U, V, C, FU, FV, KU, KV = self.U, self.V, self.C, self.FU, self.FV, self.KU, self.KV
-        fpar, ipar, out = self._fpar, self._ipar, self._out
-        R, P = self.VEC[K.V_R], self.C[K.C_P]
-        data, A, gather = self._data, self._amg_A, self._amg_gather
-        it = 0
-        while True:
-            res, qref, fin, fout, acc, mass = K.predict_residual(U, V, C, FU, FV, KU, KV, self.row_of, R, fpar, ipar)
-            rel = res / qref if qref > 0.0 else 0.0
-            out[[K.O_RES, K.O_QREF, K.O_IN, K.O_OUT, K.O_ACC, K.O_MASS, K.O_REL]] = (res, qref, fin, fout, acc,
-                                                                                      mass, rel)
-            ipar[K.I_ITER] = it
-            status = (K.NOT_FINITE if not math.isfinite(rel) else K.CONVERGED if rel <= self.tolerance
-                      else K.MAX_ITERATIONS if it >= self.max_iterations else -1)
-            if status >= 0:
-                K.fill_face_ghosts(U, V, self.flags, nx, ny)
-                out[K.O_COURANT] = K.courant_number(U, V, fpar, ipar)
-                return status
-            K.assemble_pressure(data, self.diag_pos, self.upos, self.vpos, self.pin_pos, U, V, C, FU, FV, KU, KV,
-                                fpar, ipar)
-            np.take(data, gather, out=A.data)
-            b = -R
-            if self.pin_diag >= 0:
-                b[0] = 0.0
-            target = max(KRYLOV_REDUCTION * float(np.linalg.norm(b)), 0.1 * self.tolerance * qref / math.sqrt(n))
-            fresh = self._amg_ml is None or self._amg_stale
-            while True:
-                if fresh:
-                    self._amg_setup()
-                dp, its = self._amg_solve(b, target)
-                ipar[K.I_KRYLOV] += its
-                if dp is not None:
-                    break
-                if fresh:
-                    raise CaseError(
-                        f"gas.linear_solver = 'pyamg': GMRES with the pyamg multigrid preconditioner did not reduce "
-                        f"the pressure-correction residual to {target:.3g} in {KRYLOV_MAX} iterations; use "
-                        "'multigrid' or 'superlu'")
-                fresh = True  # an older hierarchy: make it anew and try again
-            P[1:-1, 1:-1] += dp.reshape(nx, ny)
-            K.fill_centre_ghosts(P, self.flags, self.RULES[K.RULE_P], C[K.C_PFIX], nx, ny)
-            K.update_density(C, fpar[K.F_COMP], fpar[K.F_RHOC], fpar[K.F_PREF])
-            it += 1
-
-    def _amg_setup(self) -> None:
-        """A pyamg hierarchy (classical Ruge-Stüben AMG, symmetric Gauss-Seidel smoothing) of the current
-        pressure matrix; a CaseError if pyamg cannot make one."""
-        try:
-            self._amg_ml = self._pyamg.ruge_stuben_solver(self._amg_A.copy(), max_coarse=COARSEST)
-            self._amg_M = self._amg_ml.aspreconditioner(cycle="V")
-        except Exception as err:  # noqa: BLE001 - any failure of the library is the case's to fix
-            self._amg_ml = None
-            raise CaseError(f"gas.linear_solver = 'pyamg': the pyamg multigrid setup failed "
-                            f"({type(err).__name__}: {err}); use 'multigrid' or 'superlu'") from err
-        self._amg_rate0 = None
-        self._amg_stale = False
-        self._lu_data[:] = self._data
-        self._ipar[K.I_HAVE_LU] = 1
-        self._ipar[K.I_NFACT] += 1
-
-    def _amg_solve(self, b: np.ndarray, target: float):
-        """(p', iterations) with ||b - A p'||_2 <= target by pyamg's flexible GMRES (right-preconditioned,
-        its test is on the true residual; checked here and continued if its estimate was short), or
-        (None, iterations) if KRYLOV_MAX iterations were not enough. Marks the hierarchy stale when the
-        residual fell by less than AMG_RATE or the square root of its first rate per iteration."""
-        A = self._amg_A
-        bn = float(np.linalg.norm(b))
-        x = np.zeros_like(b)
-        if bn <= target:
-            return x, 0
-        its, rn = 0, bn
-        while rn > target:
-            if its >= KRYLOV_MAX:
-                return None, its
-            residuals = []
-            try:
-                x, _ = self._pyamg.krylov.fgmres(A, b, x0=x, tol=target / bn, restart=KRYLOV_RESTART,
-                                                 maxiter=max(1, (KRYLOV_MAX - its) // KRYLOV_RESTART), M=self._amg_M,
-                                                 residuals=residuals)
-            except Exception as err:  # noqa: BLE001
-                raise CaseError(f"gas.linear_solver = 'pyamg': the pyamg solve failed ({type(err).__name__}: "
-                                f"{err}); use 'multigrid' or 'superlu'") from err
-            its += max(len(residuals) - 1, 1)
-            rn = float(np.linalg.norm(b - A @ x))
-            if not math.isfinite(rn):
-                return None, its
-        rate = (rn / bn) ** (1.0 / max(its, 1))
-        if self._amg_rate0 is None:
-            self._amg_rate0 = rate
-        else:
-            self._amg_stale = rate > max(AMG_RATE, math.sqrt(self._amg_rate0))
-        return x, its
 
     def _factorise(self) -> None:
         """Factorise the assembled pressure-correction matrix (SuperLU) and keep its factors as CSC arrays
@@ -1004,16 +815,16 @@ class GasSolver:
         Uu = lu.U.tocsc()
         Us = sp.triu(Uu, k=1, format="csc")
         lui = np.zeros((4, n + 1), np.int64)
-        lui[K.L_LP] = L.indptr
-        lui[K.L_UP] = Us.indptr
-        lui[K.L_PERM_R, :n] = lu.perm_r
-        lui[K.L_PERM_C, :n] = lu.perm_c
-        self._factors = (lui, L.indices.astype(np.int64), L.data.copy(), Us.indices.astype(np.int64), Us.data.copy(),
-                         Uu.diagonal().copy())
+        lui[LK.L_LP] = L.indptr
+        lui[LK.L_UP] = Us.indptr
+        lui[LK.L_PERM_R, :n] = lu.perm_r
+        lui[LK.L_PERM_C, :n] = lu.perm_c
+        self._factors = lay.LUFactors(lui, L.indices.astype(np.int64), L.data.copy(), Us.indices.astype(np.int64),
+                                      Us.data.copy(), Uu.diagonal().copy())
         self._lu_data[:] = self._data
-        self._ipar[K.I_HAVE_LU] = 1
-        self._ipar[K.I_NFACT] += 1
-        self._set_iterate_args()
+        self._ipar[lay.I_HAVE_LU] = 1
+        self._ipar[lay.I_NFACT] += 1
+        self._set_groups()
 
     # ------------------------------------------------------------ checkpoint
     FACTOR_NAMES = ("lu_index", "l_indices", "l_data", "u_indices", "u_data", "u_diagonal")
@@ -1026,11 +837,11 @@ class GasSolver:
         matrix was factorised when. A run resumed with fresh factors then drifts from the uninterrupted run
         at the tolerance's level, and a bubbling bed, being chaotic, makes that a different flow within a
         second (tsuji-jet: particles 0.14 m apart 0.1 s after a resume). With these arrays restored
-        (``restore_factors``) the resumed run goes on bit for bit. The band and SuperLU paths; the pyamg
-        path keeps a Python hierarchy and starts afresh (a tolerance-level difference, as before)."""
+        (``restore_factors``) the resumed run goes on bit for bit. The band and SuperLU paths (the
+        multigrid makes its hierarchy anew every iteration)."""
         ipar = self._ipar
         out = {"matrix": self.MAT, "band": self._band, "band_lu": self._band_lu,
-               "flags": np.array([ipar[K.I_HAVE_LU], ipar[K.I_SOLVER]], np.int64)}
+               "flags": np.array([ipar[lay.I_HAVE_LU], ipar[lay.I_SOLVER]], np.int64)}
         out.update(zip(self.FACTOR_NAMES, self._factors))
         return out
 
@@ -1045,31 +856,30 @@ class GasSolver:
         self._band[...] = arrays["band"]
         self._band_lu[...] = arrays["band_lu"]
         have_lu, solver = (int(x) for x in arrays["flags"])
-        if solver == SOLVER_PYAMG or self._ipar[K.I_SOLVER] == SOLVER_PYAMG:
-            have_lu = 0  # the pyamg hierarchy is not in the checkpoint: made anew
-        else:
-            self._ipar[K.I_SOLVER] = solver
-        self._ipar[K.I_HAVE_LU] = have_lu
-        self._factors = tuple(np.ascontiguousarray(arrays[k]) for k in self.FACTOR_NAMES)
-        self._set_iterate_args()
+        if solver in (lay.SOLVER_SUPERLU, lay.SOLVER_BAND, lay.SOLVER_MULTIGRID):
+            self._ipar[lay.I_SOLVER] = solver
+        else:  # a code the kernels do not know (3: written by the pyamg path): no factors to take back
+            have_lu = 0
+        self._ipar[lay.I_HAVE_LU] = have_lu
+        self._factors = lay.LUFactors(*(np.ascontiguousarray(arrays[k]) for k in self.FACTOR_NAMES))
+        self._set_groups()
 
     @property
     def factorisations(self) -> int:
-        """Pressure-matrix factorisations so far (band or SuperLU; multigrid and pyamg: hierarchies made)."""
-        return int(self._ipar[K.I_NFACT])
+        """Pressure-matrix factorisations so far (band or SuperLU; multigrid: hierarchies made)."""
+        return int(self._ipar[lay.I_NFACT])
 
     @property
     def linear_solver(self) -> str:
-        """'band' (compiled band LU), 'multigrid' (compiled GMRES with a multigrid preconditioner),
-        'superlu' (SciPy) or 'pyamg' (FGMRES with pyamg's algebraic multigrid), whichever solves the
-        pressure-correction equations now."""
-        return {K.SOLVER_BAND: "band", K.SOLVER_MULTIGRID: "multigrid",
-                SOLVER_PYAMG: "pyamg"}.get(int(self._ipar[K.I_SOLVER]), "superlu")
+        """'band' (compiled band LU), 'multigrid' (compiled GMRES with a multigrid preconditioner) or
+        'superlu' (SciPy), whichever solves the pressure-correction equations now."""
+        return {lay.SOLVER_BAND: "band", lay.SOLVER_MULTIGRID: "multigrid"}.get(int(self._ipar[lay.I_SOLVER]),
+                                                                                "superlu")
 
     @property
     def krylov_iterations(self) -> int:
-        """GMRES iterations so far (multigrid and pyamg paths; 0 otherwise)."""
-        return int(self._ipar[K.I_KRYLOV])
+        """GMRES iterations so far (multigrid path; 0 otherwise)."""
+        return int(self._ipar[lay.I_KRYLOV])
 
     # ------------------------------------------------------------ helpers
     def max_time_step(self, state: GasState, courant: float = 0.5) -> float:
@@ -1083,94 +893,5 @@ class GasSolver:
         return min(dt_c, dt_v)
 
 
-# ================================================================ benchmark
-def gas_step_benchmark(grids=((15, 25), (39, 60), (150, 300)), seconds: float = 2.0, convection: str = "upwind",
-                       moving_bed: tuple[bool, ...] = (False, True), verbose: bool = False,
-                       linear_solver: str = "auto") -> list[dict]:
-    """Wall time of one gas step on standard grids; rows for ``fluidem bench``.
-
-    The problem is the Hoomans 1996 single-orifice bed (Table 2 geometry 0.15 m ×
-    0.5 m, scaled to each grid): ideal gas, jet of 45 m/s interstitial in the centre
-    of the bottom (4.5 m/s elsewhere) through influx cells of voidage 0.4, no-slip
-    side walls, pressure outlet on top, a bed of voidage 0.4 in the lower 0.2 m with
-    Ergun's β (eq. 45, d_p = 4 mm) recomputed from the gas velocity every step, as a
-    coupled run would. ``moving_bed``: whether the bed's voidage also changes every step
-    (a surface wave and a rising bubble, 0.5 m/s), which changes the pressure matrix
-    as particles do. The time step is Hoomans' DT = 1e-4 s, or less where the jet would
-    cross more than half the smaller cell side in a step (explicit convection):
-    dt = min(1e-4, 0.5 min(dx, dy) / 45 m/s). The first 20 steps (compilation, start-up
-    transient) are not timed; then ``advance`` alone is timed for about ``seconds`` per row.
-    ``linear_solver``: the ``GasSolver`` option (e.g. "pyamg" against "multigrid").
-
-    Returns
-    -------
-    list of dict
-        One row per grid and bed: problem, grid, cells, dt_s, linear_solver, steps,
-        ms_per_step, iterations_per_step (pressure corrections), factorisations_per_step.
-    """
-    rows = []
-    for nx, ny in grids:
-        for moving in moving_bed:
-            solver, state, beta_of, voidage_at = _bench_problem(nx, ny, convection, linear_solver)
-            t, dt = 0.0, min(1e-4, 0.5 * min(solver.grid.dx, solver.grid.dy) / 45.0)
-            for _ in range(20):
-                solver.advance(state, dt, t, voidage=voidage_at(t + dt) if moving else None, beta=beta_of(state),
-                               solids_u=0.0, solids_v=0.0)
-                t += dt
-            n, its, fac0, elapsed, wall0 = 0, 0, solver.factorisations, 0.0, time.perf_counter()
-            while (time.perf_counter() - wall0 < seconds or n < 3) and n < 100000:
-                beta = beta_of(state)  # the coupling's work, not timed
-                eps = voidage_at(t + dt) if moving else None
-                t0 = time.perf_counter()
-                info = solver.advance(state, dt, t, voidage=eps, beta=beta, solids_u=0.0, solids_v=0.0)
-                elapsed += time.perf_counter() - t0
-                t += dt
-                n += 1
-                its += info.iterations
-            row = {"problem": f"gas step, jet bed, {'moving' if moving else 'fixed'} voidage ({convection})",
-                   "grid": f"{nx}x{ny}", "cells": nx * ny, "dt_s": dt, "linear_solver": solver.linear_solver,
-                   "steps": n, "ms_per_step": 1e3 * elapsed / n,
-                   "iterations_per_step": its / n, "factorisations_per_step": (solver.factorisations - fac0) / n}
-            rows.append(row)
-            if verbose:
-                print(f"{row['grid']:>8} {'moving' if moving else 'fixed ':6} dt {dt:.2g} s {row['linear_solver']:>7}"
-                      f"  {row['ms_per_step']:9.3f} ms/step  {row['iterations_per_step']:.2f} it/step  "
-                      f"{row['factorisations_per_step']:.3f} LU/step", flush=True)
-    return rows
-
-
-def _bench_problem(nx: int, ny: int, convection: str = "upwind", linear_solver: str = "auto"):
-    """Solver, state, β(state) and voidage(t) of the benchmark bed on an nx × ny grid."""
-    from .boundaries import Inflow, PressureOutlet, Segment, Wall
-
-    grid = StaggeredGrid(cells=(nx, ny), size=(0.15, 0.5), depth=0.004)
-    props = GasProperties()
-    bcs = {"left": Wall(), "right": Wall(), "top": PressureOutlet(pressure=101325.0),
-           "bottom": Inflow(segments=(Segment(interstitial=4.5), Segment(interstitial=45.0, start=0.07, end=0.08)),
-                            voidage=0.4)}
-    solver = GasSolver(grid, props, bcs, convection=convection, linear_solver=linear_solver)
-    X, Y = grid.centres()
-    state = solver.initial_state(voidage=np.where(Y < 0.2, 0.4, 1.0))
-    d_p = 4e-3
-    mu = props.viscosity
-
-    def beta_of(st: GasState) -> np.ndarray:
-        uc = 0.5 * (st.u[1:] + st.u[:-1])
-        vc = 0.5 * (st.v[:, 1:] + st.v[:, :-1])
-        slip = np.hypot(uc, vc)
-        e = st.voidage
-        # Hoomans 1996 eq. 45 (Ergun) in the bed; no particles above it
-        b = 150.0 * (1 - e) ** 2 / e * mu / d_p**2 + 1.75 * (1 - e) * st.rho / d_p * slip
-        return np.where(e < 0.8, b, 0.0)
-
-    def voidage_at(t: float) -> np.ndarray:
-        surface = 0.2 + 0.01 * np.sin(2 * np.pi * (X / 0.15 - t / 0.2))
-        bed = 0.4 + 0.6 / (1.0 + np.exp(-(Y - surface) / 0.01))
-        r = np.hypot(X - 0.075, Y - (0.05 + 0.5 * t) % 0.15)
-        return np.clip(bed + 0.4 / (1.0 + np.exp((r - 0.02) / 0.005)), 0.4, 1.0)
-
-    return solver, state, beta_of, voidage_at
-
-
-__all__ = ["GasProperties", "GasState", "GasSolver", "StepInfo", "GasConvergenceError", "gas_step_benchmark",
+__all__ = ["GasProperties", "GasState", "GasSolver", "StepInfo", "GasConvergenceError",
            "GAS_CONSTANT"]

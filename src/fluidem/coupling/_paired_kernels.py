@@ -20,7 +20,7 @@ boundary face's weight onto the first interior face: the gas solves no momentum 
 inflow face, and the half cell along it has no control volume of its own, so the first interior
 face's stands for it (as it does for ∇p, ``_face_gradient``). Without ``fold`` the drag deposited
 on such a face is momentum exchanged with that boundary: near an inflow, weight of the bed that
-the gas pressure does not carry (issue 4's u_mf sweep: plateau −4.6 % of W/A).
+the gas pressure does not carry (the u_mf sweep of tests/validation/test_umf_sweep.py: plateau −4.6 % of W/A).
 
 ``deposit`` (and ``pressure_voidage`` for the other exchanges) also gives the gas the voidage of
 its pressure term, ε_p,f = 1 − Σ_p w_pf V_p / V_f with the weights of the particles' ∇p, so

@@ -449,7 +449,7 @@ class GasCoupling:
     def restore(self, arrays: dict[str, np.ndarray], scalars: dict) -> None:
         self.state = GasState(**{k: np.ascontiguousarray(arrays[f"gas/{k}"], dtype=float) for k in GAS_KEYS})
         solver = {k.split("/", 1)[1]: v for k, v in arrays.items() if k.startswith("gas_solver/")}
-        if solver:  # absent from checkpoints before 2026-11-26 (fifteenth session): fresh factors
+        if solver:  # absent from checkpoints written before 2026-11-26: fresh factors
             self.solver.restore_factors(solver)
         self.gas_steps = int(scalars["gas_steps"])
         self.courant_max = float(scalars.get("gas_courant_max", 0.0))  # absent from checkpoints before 2026-11-26

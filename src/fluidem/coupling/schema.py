@@ -14,8 +14,8 @@ assumption after eq. 35), not equal and opposite; kept to compare with it.
 ``hoomans1996_total`` (Hoomans 1996 eqs 35-39 on the particles, eqs 45-47 for the gas) is his
 own formulation: it requires ``pressure_gradient_force = false`` and ``momentum_exchange =
 "cell_beta"`` (checked here).
-``drag_update`` says when the particle drag is re-evaluated (the issue's "re-evaluated every
-sub-step with the gas frozen (default) or held for the whole DT"): ``"substep"`` (default) every
+``drag_update`` says when the particle drag is re-evaluated (re-evaluated every
+sub-step with the gas frozen, the default, or held for the whole DT): ``"substep"`` (default) every
 DEM sub-step in the gas field of that DT — for the "particle" exchange with its drag coefficient
 K_p, gas velocity and pressure gradient at the particle kept from the step's start and the
 particle's own velocity of each sub-step, inside the engine's one compiled call; for "cell" and

@@ -6,6 +6,9 @@ eq. 33), particle force from the vectorised ``DragLaw.particle_force`` (eq. 29) 
 (eq. 28), and the particle → grid map (Sun 2007 eqs 34-35, Hoomans 1996 §3.4, eqs 49-50).
 Random polydisperse particles (some on cell faces, some outside the domain) over a random gas
 state; every drag law and every voidage mapping; equal to 1e-12 relative (in practice to the bit).
+The particles have many sizes, so the drag is the polydisperse one (DEM book 2012 eqs 10-12): the
+reference takes 1/D̄ per cell by bincount and y = d/D̄ of the particle's cell (cell β) or
+interpolated as ε (particle forces).
 """
 from __future__ import annotations
 
@@ -80,6 +83,32 @@ def ref_pressure_gradient(grid, p):
     return gx, gy
 
 
+def ref_inv_dbar(grid, pos, radius):
+    """1/D̄ per cell (DEM book 2012 eq. 10): Σ V/d / Σ V over the centres in the cell; the bed's in empty cells."""
+    nx, ny = grid.shape
+    d = 2.0 * radius
+    volume = math.pi / 6.0 * d**3
+    i = np.clip(np.floor(pos[:, 0] / grid.dx).astype(np.int64), 0, nx - 1)
+    j = np.clip(np.floor(pos[:, 1] / grid.dy).astype(np.int64), 0, ny - 1)
+    s = np.bincount(i * ny + j, weights=volume / d, minlength=nx * ny).reshape(nx, ny)
+    v = np.bincount(i * ny + j, weights=volume, minlength=nx * ny).reshape(nx, ny)
+    return np.where(v > 0.0, s / np.where(v > 0.0, v, 1.0), (volume / d).sum() / volume.sum())
+
+
+def ref_y(cpl, pos, radius, at_cell):
+    """y = d/D̄ of each particle (eq. 11): 1/D̄ of its cell, or interpolated to it; 1 without the mixture rule."""
+    if cpl.polydisperse != "sauter_y2":
+        return np.ones_like(radius)
+    grid = cpl.grid
+    inv = ref_inv_dbar(grid, pos, radius)
+    if at_cell:
+        nx, ny = grid.shape
+        i = np.clip((pos[:, 0] / grid.dx).astype(np.int64), 0, nx - 1)
+        j = np.clip((pos[:, 1] / grid.dy).astype(np.int64), 0, ny - 1)
+        return 2.0 * radius * inv[i, j]
+    return 2.0 * radius * ref_interpolate(grid, inv, pos, "centre", False)
+
+
 def ref_particle_forces(cpl, pos, vel, radius):
     grid, gs = cpl.grid, cpl.state
     d = 2.0 * radius
@@ -89,7 +118,8 @@ def ref_particle_forces(cpl, pos, vel, radius):
     ug[:, 1] = ref_interpolate(grid, gs.v, pos, "y_face", True)
     eps = np.clip(ref_interpolate(grid, gs.voidage, pos, "centre", False), cpl.mapping.minimum_voidage, 1.0)
     rho = ref_interpolate(grid, gs.rho, pos, "centre", False)
-    force = cpl.drag.particle_force(eps, ug, vel, d, rho, cpl.solver.props.viscosity)  # Sun 2007 eq. 29
+    force = cpl.drag.particle_force(eps, ug, vel, d, rho, cpl.solver.props.viscosity,
+                                    ref_y(cpl, pos, radius, False))  # Sun 2007 eq. 29, DEM book 2012 eq. 12
     if cpl.options.pressure_gradient_force:  # eq. 28
         gx, gy = ref_pressure_gradient(grid, gs.p)
         force[:, 0] -= volume * ref_interpolate(grid, gx, pos, "x_face", False)
@@ -106,8 +136,8 @@ def ref_cell_beta(cpl, pos, radius, voidage, su, sv):
     slip = np.hypot(0.5 * (gs.u[:-1] + gs.u[1:]) - su, 0.5 * (gs.v[:, :-1] + gs.v[:, 1:]) - sv)
     i = np.clip((pos[:, 0] / grid.dx).astype(np.int64), 0, nx - 1)
     j = np.clip((pos[:, 1] / grid.dy).astype(np.int64), 0, ny - 1)
-    coef = cpl.drag.gas_side().beta_per_solids(voidage[i, j], slip[i, j], d, gs.rho[i, j], cpl.solver.props.viscosity) \
-        * (math.pi / 6.0 * d**3)
+    coef = cpl.drag.gas_side().beta_per_solids(voidage[i, j], slip[i, j], d, gs.rho[i, j], cpl.solver.props.viscosity,
+                                               ref_y(cpl, pos, radius, True)) * (math.pi / 6.0 * d**3)
     return np.bincount(i * ny + j, weights=coef, minlength=nx * ny).reshape(nx, ny) / grid.cell_volume
 
 
@@ -207,6 +237,7 @@ def test_compiled_coupling_matches_numpy_reference(drag, mapping):
     """map, cell β and particle forces of GasCoupling against the NumPy reference, every drag law × mapping."""
     cpl = coupling(drag, MAPPINGS[mapping])
     st = cpl.engine.state
+    assert cpl.polydisperse == ("none" if D.drag_laws.get(drag).total_force else "sauter_y2")  # many sizes
     smap = cpl._map()
     ref = ref_map(cpl.mapping, cpl.grid, st.position, st.radius, st.velocity)
     for k in ("voidage", "solids_u", "solids_v"):
@@ -313,7 +344,7 @@ def test_paired_kernels_give_the_same_bits_on_any_number_of_threads(all_threads,
         face = [np.zeros(gd.u_shape), np.zeros(gd.u_shape), np.zeros(gd.v_shape), np.zeros(gd.v_shape)]
         pv = [np.zeros(gd.u_shape), np.zeros(gd.v_shape)]
         bad = P.deposit(cpl.drag.pack(), st.position, st.velocity, st.radius, cpl.volume, gs.u, gs.v, gs.voidage,
-                        gs.rho, cpl.solver.props.viscosity, gd.dx, gd.dy, 0.0, *cpl._periodic, kp, *sums, kc,
+                        gs.rho, cpl.solver.props.viscosity, cpl._inv_dbar, gd.dx, gd.dy, 0.0, *cpl._periodic, kp, *sums, kc,
                         gd.cell_volume, *cpl._face_volumes, *face, True, *pv, parallel)
         return bad, [kp, kc, *sums, *face, *pv]
 

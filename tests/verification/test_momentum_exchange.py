@@ -240,7 +240,7 @@ def test_a_uniform_bed_gives_every_face_the_same_beta_and_pressure_voidage(perio
     law = drag_laws.get("gidaspow")().pack()
     vel = np.zeros((n, 3))
     bad = P.deposit(law, pos, vel, radius, volume, np.full((nx + 1, ny), 0.3), np.full((nx, ny + 1), 0.5),
-                    np.full((nx, ny), 0.6), np.full((nx, ny), 1.2), 1.8e-5, dx, dx, 0.3, *periodic, kp, *faces,
+                    np.full((nx, ny), 0.6), np.full((nx, ny), 1.2), 1.8e-5, np.zeros((0, 0)), dx, dx, 0.3, *periodic, kp, *faces,
                     np.zeros((nx, ny)), vol, vu, vv, coeff[0], coeff[1], coeff[2], coeff[3], True, eu, ev, False)
     assert bad == 0
     beta_u, beta_v = coeff[0], coeff[2]

@@ -55,8 +55,8 @@ def store_force(out, total, q, fx, fy, fz, follow):
 
 
 @njit(cache=True, error_model="numpy")
-def cell_beta(law, position, radius, volume, u, v, rho, voidage, solids_u, solids_v, mu, dx, dy, cell_volume,
-              out):
+def cell_beta(law, position, radius, volume, u, v, rho, voidage, solids_u, solids_v, mu, inv_dbar, dx, dy,
+              cell_volume, out):
     """out[i, j] = Σ_{p in (i, j)} β/(1 − ε) V_p / V_cell [kg m^-3 s^-1] (Sun 2007 eq. 33).
 
     Each particle counts in the cell of its centre; β/(1 − ε) of the drag law packed in ``law`` is taken with the
@@ -64,9 +64,12 @@ def cell_beta(law, position, radius, volume, u, v, rho, voidage, solids_u, solid
     |(u_cell, v_cell) − (v_s,x, v_s,y)|, u_cell and v_cell the means of the two faces.
     position : (N, ≥2) [m]; radius, volume : (N,); u : (nx + 1, ny); v : (nx, ny + 1);
     rho, voidage, solids_u, solids_v, out : (nx, ny). Returns the number of particles whose drag
-    arguments are out of range. β/(1 − ε) is evaluated once per cell and diameter.
+    arguments are out of range. β/(1 − ε) is evaluated once per cell and diameter. inv_dbar (nx, ny):
+    1/D̄ of each cell's mixture [1/m] for the polydisperse drag, y = d/D̄ of the cell (DEM book 2012
+    eqs 10-12, ``drag._dispatch.beta_per_solids``); (0, 0) for a monodisperse bed (y = 1).
     """
     nx, ny = out.shape
+    mixture = inv_dbar.shape[0] > 0
     done_d = np.full((nx, ny), np.nan)  # diameter whose β/(1 − ε) done_b holds, per cell
     done_b = np.empty((nx, ny))
     for i in range(nx):
@@ -87,7 +90,7 @@ def cell_beta(law, position, radius, volume, u, v, rho, voidage, solids_u, solid
             if not _drag_arguments_valid(eps, slip, d, rg, mu):
                 bad += 1
                 continue
-            b = beta_per_solids(law, eps, slip, d, rg, mu, 1.0)
+            b = beta_per_solids(law, eps, slip, d, rg, mu, d * inv_dbar[i, j] if mixture else 1.0)
             done_d[i, j] = d
             done_b[i, j] = b
         out[i, j] += b * volume[p]  # eq. 33
@@ -112,8 +115,8 @@ def _mean2(f, i, j, w):
 
 
 @njit(cache=True, error_model="numpy")
-def gas_forces(law, position, velocity, radius, volume, u, v, voidage, rho, p, mu, xc, yc, xf, yf, dx, dy,
-               min_voidage, pressure_force, dim2, out, total):
+def gas_forces(law, position, velocity, radius, volume, u, v, voidage, rho, p, mu, inv_dbar, xc, yc, xf, yf, dx,
+               dy, min_voidage, pressure_force, dim2, out, total):
     """out[q] = gas force on particle q [N]: β V_p/(1 − ε) (u − v_q) (Sun 2007 eq. 29), minus V_p ∇p if
     ``pressure_force`` (eq. 28); z component 0 if ``dim2``.
 
@@ -128,7 +131,9 @@ def gas_forces(law, position, velocity, radius, volume, u, v, voidage, rho, p, m
     voidage, rho, p : (nx, ny). ``total``: (N, 3) to make it follow the change of ``out``
     (total += new − out, then out = new: the engine's stored total force and its ``ext_force``),
     or (0, 3) for none. Returns the number of particles whose drag arguments are out of range
-    (their force is NaN). Serial: at the particle counts of coupled 2D beds a parallel region
+    (their force is NaN). inv_dbar (nx, ny): 1/D̄ of each cell's mixture [1/m], interpolated to the
+    centre as ε is, for the polydisperse drag y = d/D̄ (DEM book 2012 eqs 10-12); (0, 0) for a
+    monodisperse bed (y = 1). Serial: at the particle counts of coupled 2D beds a parallel region
     costs more than it saves, and beside the DEM of large beds this kernel is small.
     """
     nx, ny = voidage.shape
@@ -149,6 +154,10 @@ def gas_forces(law, position, velocity, radius, volume, u, v, voidage, rho, p, m
         pad(gy, True, False, False, yfa[:, :, 1])
     three = velocity.shape[1] > 2
     follow = total.shape[0] > 0
+    mixture = inv_dbar.shape[0] > 0
+    dbar = np.empty((nx + 2, ny + 2) if mixture else (0, 0))  # 1/D̄ at the wall-extended centres
+    if mixture:
+        pad(inv_dbar, True, True, False, dbar)
     bad = 0
     for q in range(position.shape[0]):
         x = position[q, 0]
@@ -172,7 +181,12 @@ def gas_forces(law, position, velocity, radius, volume, u, v, voidage, rho, p, m
         slip = math.sqrt(wx * wx + wy * wy + wz * wz)
         d = 2.0 * radius[q]
         if _drag_arguments_valid(eps, slip, d, rg, mu):
-            c = beta_per_solids(law, eps, slip, d, rg, mu, 1.0) * volume[q]  # β V_p/(1 − ε), eq. 29
+            yq = 1.0
+            if mixture:
+                w = _weights(txc, tyc)
+                yq = d * (w[0] * dbar[ic, jc] + w[1] * dbar[ic + 1, jc] + w[2] * dbar[ic + 1, jc + 1]
+                          + w[3] * dbar[ic, jc + 1])
+            c = beta_per_solids(law, eps, slip, d, rg, mu, yq) * volume[q]  # β V_p/(1 − ε), eq. 29
             fx = c * wx
             fy = c * wy
             fz = c * wz

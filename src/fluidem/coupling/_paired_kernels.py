@@ -195,7 +195,7 @@ def _scatter(A, B, i0, i1, a0, a1, j0, j1, b0, b1, k, vel):
 
 
 @njit(cache=True, error_model="numpy")
-def deposit(law, position, velocity, radius, volume, u, v, voidage, rho, mu, dx, dy, min_voidage, px, py, kp,
+def deposit(law, position, velocity, radius, volume, u, v, voidage, rho, mu, inv_dbar, dx, dy, min_voidage, px, py, kp,
             AU, BU, AV, BV, KC, vol, VU, VV, beta_u, su, beta_v, sv, fold, EU, EV, parallel=False):
     """K_p and the face sums of the ``particle`` mode (module docstring); returns the number of
     particles whose drag arguments are out of range (their K_p is NaN, nothing deposited).
@@ -209,7 +209,9 @@ def deposit(law, position, velocity, radius, volume, u, v, voidage, rho, mu, dx,
     face volumes VU (nx + 1, ny), VV (nx, ny + 1) of ``exchange.face_volumes``.
 
     EU (nx + 1, ny), EV (nx, ny + 1), or both (0, 0) for none: the pressure term's face voidage
-    (``pressure_voidage``), deposited in the same pass.
+    (``pressure_voidage``), deposited in the same pass. inv_dbar (nx, ny): 1/D̄ of each cell's mixture
+    [1/m] (``voidage.sauter_inverse``), interpolated to each particle as ε is, for the polydisperse
+    drag (``drag._dispatch.beta_per_solids``); (0, 0) for a monodisperse bed (y = 1).
     """
     nx, ny = voidage.shape
     idx, idy = 1.0 / dx, 1.0 / dy
@@ -221,10 +223,12 @@ def deposit(law, position, velocity, radius, volume, u, v, voidage, rho, mu, dx,
     n = position.shape[0]
     valid = np.empty(n, dtype=np.bool_)
     if parallel and n > CHUNK:
-        bad = _kp_parallel(law, position, velocity, radius, volume, u, v, voidage, rho, mu, idx, idy, min_voidage,
+        bad = _kp_parallel(law, position, velocity, radius, volume, u, v, voidage, rho, mu, inv_dbar, idx, idy,
+                           min_voidage,
                            px, py, fold, kp, valid)
     else:
-        bad = _kp_range(0, n, law, position, velocity, radius, volume, u, v, voidage, rho, mu, idx, idy, min_voidage,
+        bad = _kp_range(0, n, law, position, velocity, radius, volume, u, v, voidage, rho, mu, inv_dbar, idx, idy,
+                        min_voidage,
                         px, py, fold, kp, valid)
     solids = EU.shape[0] > 0
     if solids:
@@ -262,12 +266,13 @@ def deposit(law, position, velocity, radius, volume, u, v, voidage, rho, mu, dx,
 
 
 @njit(cache=True, error_model="numpy")
-def _kp_range(lo, hi, law, position, velocity, radius, volume, u, v, voidage, rho, mu, idx, idy, min_voidage, px,
-              py, fold, kp, valid):
+def _kp_range(lo, hi, law, position, velocity, radius, volume, u, v, voidage, rho, mu, inv_dbar, idx, idy, min_voidage,
+              px, py, fold, kp, valid):
     """kp[q] of ``deposit`` for particles lo..hi−1, valid[q] whether its drag arguments are in range (else
     kp[q] = NaN); returns the number out of range."""
     nx, ny = voidage.shape
     three = velocity.shape[1] > 2
+    mixture = inv_dbar.shape[0] > 0
     bad = 0
     for q_ in range(lo, hi):
         q = U(q_)
@@ -292,18 +297,20 @@ def _kp_range(lo, hi, law, position, velocity, radius, volume, u, v, voidage, rh
             bad += 1
             kp[q] = math.nan
             continue
-        kp[q] = beta_per_solids(law, eps, slip, d, rg, mu, 1.0) * volume[q]
+        # y = d/D̄ (DEM book 2012 eq. 11) with 1/D̄ interpolated as ε is; 1 for a monodisperse bed
+        yq = d * _mean(inv_dbar, ci0, ci1, cw0, cw1, cj0, cj1, cv0, cv1) if mixture else 1.0
+        kp[q] = beta_per_solids(law, eps, slip, d, rg, mu, yq) * volume[q]
     return bad
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
-def _kp_parallel(law, position, velocity, radius, volume, u, v, voidage, rho, mu, idx, idy, min_voidage, px, py, fold,
-                 kp, valid):
+def _kp_parallel(law, position, velocity, radius, volume, u, v, voidage, rho, mu, inv_dbar, idx, idy, min_voidage, px,
+                 py, fold, kp, valid):
     n = position.shape[0]
     bad = 0
     for c in prange((n + CHUNK - 1) // CHUNK):
         bad += _kp_range(c * CHUNK, min(n, (c + 1) * CHUNK), law, position, velocity, radius, volume, u, v, voidage,
-                         rho, mu, idx, idy, min_voidage, px, py, fold, kp, valid)
+                         rho, mu, inv_dbar, idx, idy, min_voidage, px, py, fold, kp, valid)
     return bad
 
 

@@ -58,6 +58,7 @@ from ..gas.solver import GasState
 from ..gas import _layout as GL
 from ..gas._operators import centre_to_x_faces, centre_to_y_faces
 from . import _exchange_kernels as K
+from . import _voidage_kernels as VK
 from . import _paired_kernels as P
 from . import interpolation as I
 
@@ -152,6 +153,9 @@ class GasCoupling:
         xc, yc = I._axes(self.grid, "centre")[:2]
         self._nodes = (xc, yc, self.grid.x_faces, self.grid.y_faces)  # interpolation nodes, Hoomans eqs 40-41
         self._gas_ok = None  # the gas arrays _check_gas found right
+        # polydisperse drag (CouplingSection.polydisperse): 1/D̄ per cell of the gas step's map, (0, 0) for none
+        self.polydisperse = self.options.resolved_polydisperse(2.0 * st.radius)
+        self._inv_dbar = np.zeros(gd.shape if self.polydisperse == "sauter_y2" else (0, 0))
         smap = self._map()
         self.state = self.solver.initial_state(voidage=smap.voidage, velocity=self.section.initial_velocity)
         self.gas_steps = 0
@@ -175,8 +179,11 @@ class GasCoupling:
             self._kp = self._kp[order]
 
     def _map(self):
-        """particles → grid at the current positions: a ``SolidsMap`` (Sun 2007 eqs 34-35 / Hoomans eqs 49-50)."""
+        """particles → grid at the current positions: a ``SolidsMap`` (Sun 2007 eqs 34-35 / Hoomans eqs 49-50),
+        and the cells' 1/D̄ of a polydisperse drag (DEM book 2012 eq. 10, ``voidage.sauter_inverse``)."""
         st = self._particles()
+        if self._inv_dbar.shape[0] > 0:
+            VK.sauter_inverse(st.position, st.radius, self.volume, self.grid.dx, self.grid.dy, self._inv_dbar)
         return self.mapping.map_particles(self.grid, st.position, st.radius, self.volume, st.velocity)
 
     def cell_beta(self, voidage, solids_u, solids_v) -> np.ndarray:
@@ -189,7 +196,7 @@ class GasCoupling:
         self._check_gas()
         beta = np.empty(gd.shape)
         bad = K.cell_beta(self._gas_law, st.position, st.radius, self.volume, gs.u, gs.v, gs.rho, *fields,
-                          self.solver.props.viscosity, gd.dx, gd.dy, gd.cell_volume, beta)
+                          self.solver.props.viscosity, self._inv_dbar, gd.dx, gd.dy, gd.cell_volume, beta)
         if bad:
             raise ValueError(f"cell β: drag arguments out of range for {bad} particles "
                              "(voidage must lie in (0, 1], gas density > 0)")
@@ -218,7 +225,8 @@ class GasCoupling:
             raise ValueError(f"force arrays: out {out.shape}, total {total.shape}; expected (N, 3) with N = "
                              f"{st.position.shape[0]}")
         bad = K.gas_forces(self._law, st.position, st.velocity, st.radius, self.volume, gs.u, gs.v,
-                           gs.voidage, gs.rho, gs.p, self.solver.props.viscosity, *self._nodes, gd.dx, gd.dy,
+                           gs.voidage, gs.rho, gs.p, self.solver.props.viscosity, self._inv_dbar, *self._nodes,
+                           gd.dx, gd.dy,
                            self.mapping.minimum_voidage,
                            bool(self.options.pressure_gradient_force if pressure is None else pressure),
                            bool(self.engine.dim2), out, total)
@@ -336,7 +344,8 @@ class GasCoupling:
             self._kp = np.zeros(st.radius.shape)
         au, bu_, av, bv_ = self._faces
         bad = P.deposit(self._law, st.position, st.velocity, st.radius, self.volume, gs.u, gs.v, voidage,
-                        gs.rho, self.solver.props.viscosity, gd.dx, gd.dy, self.mapping.minimum_voidage,
+                        gs.rho, self.solver.props.viscosity, self._inv_dbar, gd.dx, gd.dy,
+                        self.mapping.minimum_voidage,
                         *self._periodic, self._kp, au, bu_, av, bv_, self._kp_cells, gd.cell_volume,
                         *self._face_volumes, self._face_beta[0], self._face_solids[0], self._face_beta[1],
                         self._face_solids[1],
@@ -441,6 +450,8 @@ class GasCoupling:
             out["coupling/kp"] = self._kp
         if self._paired_ready and self.exchange == "cell":
             out.update(zip(("coupling/cell_beta", "coupling/solids_u", "coupling/solids_v"), self._cell_inputs))
+        if self._inv_dbar.shape[0] > 0:  # 1/D̄ of the gas step's map, which the sub-steps' forces read
+            out["coupling/inv_dbar"] = self._inv_dbar
         return out
 
     def checkpoint_scalars(self) -> dict:
@@ -458,6 +469,8 @@ class GasCoupling:
         if self.exchange == "particle" and "coupling/kp" in arrays:
             self._kp = np.ascontiguousarray(arrays["coupling/kp"], dtype=float)
             self._paired_ready = True
+        if self._inv_dbar.shape[0] > 0 and "coupling/inv_dbar" in arrays:
+            self._inv_dbar = np.ascontiguousarray(arrays["coupling/inv_dbar"], dtype=float)
         if self.exchange == "cell" and "coupling/cell_beta" in arrays:
             self._cell_inputs = tuple(np.ascontiguousarray(arrays[f"coupling/{k}"], dtype=float)
                                       for k in ("cell_beta", "solids_u", "solids_v"))

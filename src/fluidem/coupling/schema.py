@@ -50,6 +50,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal, Union
 
+import numpy as np
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
 
 from .drag import DragLaw, drag_laws
@@ -89,6 +90,11 @@ class CouplingSection(BaseModel):
                           "volume deposited there as the particles' ∇p is interpolated, so that it loses exactly "
                           "the −V_p ∇p the particles gain (with pressure_gradient_force; particle and cell "
                           "exchange)")
+    polydisperse: Literal["sauter_y2", "none"] | None = Field(
+        None, description="drag in a mixture of sizes: 'sauter_y2', each particle takes y² times the law's drag "
+                          "at the Sauter mean diameter D̄ of the solids around it, y = d/D̄ (DEM book 2012 "
+                          "eqs 10-12); 'none', each particle the law at its own diameter. Default: 'sauter_y2' "
+                          "when the particles have more than one diameter, else 'none'")
 
     @model_validator(mode="after")
     def _total_force_alone(self):
@@ -103,7 +109,20 @@ class CouplingSection(BaseModel):
                 raise ValueError(f"drag = {name!r} gives the total gas force on a particle, which the gas "
                                  f"(−ε∇p) cannot take back as its opposite: momentum_exchange must be 'cell_beta' "
                                  f"(the gas takes β of Hoomans eqs 45-47 per cell), got {self.momentum_exchange!r}")
+            if self.polydisperse == "sauter_y2":
+                raise ValueError(f"polydisperse = 'sauter_y2' scales the drag net of the pressure-gradient force "
+                                 f"(DEM book 2012 eqs 7-12); drag = {name!r} gives the total gas force: use "
+                                 f"polydisperse = 'none' or another law")
         return self
+
+    def resolved_polydisperse(self, diameters) -> str:
+        """``polydisperse`` for particles of these diameters: the key, or by default 'sauter_y2' when they
+        have more than one size (and the law's force is the drag alone), else 'none'."""
+        if self.polydisperse is not None:
+            return self.polydisperse
+        d = np.asarray(diameters, float)
+        several = d.size > 1 and bool(np.any(d != d[0]))
+        return "sauter_y2" if several and not self.drag.total_force else "none"
 
     def drag_law(self) -> DragLaw:
         """The drag law of this section (``drag``)."""

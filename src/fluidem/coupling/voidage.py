@@ -142,6 +142,16 @@ def _diffusion_steps(grid: StaggeredGrid, width: float) -> tuple[float, float, i
     return ddt / grid.dx**2, ddt / grid.dy**2, steps
 
 
+def sauter_inverse(grid: StaggeredGrid, position, diameter) -> np.ndarray:
+    """1/D̄ [1/m] of each cell (nx, ny): the inverse Sauter mean diameter of the particles whose centre lies
+    in it, Σ V_p/d_p / Σ V_p (DEM book 2012 two-phase chapter, eq. 10); cells without particles take the
+    bed's value. The polydisperse drag takes y = d/D̄ from it (eq. 11)."""
+    pos, d = _particles(position, diameter)
+    out = np.empty(grid.shape)
+    K.sauter_inverse(pos, 0.5 * d, math.pi / 6.0 * d**3, grid.dx, grid.dy, out)
+    return out
+
+
 def clip_voidage(voidage, minimum: float) -> tuple[np.ndarray, int]:
     """(max(ε, minimum), number of cells that were below ``minimum``)."""
     e = np.asarray(voidage, float)

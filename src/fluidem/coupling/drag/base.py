@@ -73,7 +73,8 @@ class DragLaw(BaseModel):
 
         voidage ε [-] in (0, 1], slip_speed |u − v| [m/s], diameter d [m],
         gas_density ρ_g [kg/m^3], gas_viscosity μ_g [Pa s], y_ratio d_i/D̄ [-]
-        (polydisperse index, used by ``beetstra`` only).
+        (polydisperse index, DEM book 2012 eq. 11: the force is y² times the law's at D̄, eq. 12;
+        1 for a monodisperse bed).
         """
         return _evaluate(self.pack(), True, voidage, slip_speed, diameter, gas_density, gas_viscosity, y_ratio)
 

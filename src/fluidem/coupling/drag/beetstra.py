@@ -1,4 +1,4 @@
-"""Beetstra, van der Hoef & Kuipers (2007) lattice-Boltzmann drag, with the polydisperse y_i² rule.
+"""Beetstra, van der Hoef & Kuipers (2007) lattice-Boltzmann drag.
 
 Monodisperse (φ = 1 − ε, Re = ε ρ |u−v| D/μ, the superficial-velocity Reynolds number)::
 
@@ -7,12 +7,9 @@ Monodisperse (φ = 1 − ε, Re = ε ρ |u−v| D/μ, the superficial-velocity R
     β = 18 μ ε φ F/D²          (the force on a particle is β V_p/φ (u−v) = 3π μ D ε F (u−v))
 
 Reference: R. Beetstra, M. A. van der Hoef, J. A. M. Kuipers, AIChE J. 53 (2007) 489
-(ref. 8 of the DEM book 2012 two-phase chapters). Polydisperse (DEM book 2012 chapter,
-van der Hoef et al. 2005, eqs 7-12): with Sauter mean D̄ = (Σ x_i/D_i)^−1 (eq. 10) and
-y_i = D_i/D̄ (eq. 11), the drag on a particle of species i is f_di = y_i² f̄_d (eq. 12),
-f̄_d the monodisperse drag of a particle of diameter D̄ at the same ε and slip. The kernel
-takes ``d`` = D_i and ``y`` = y_i, evaluates F at D̄ = D_i/y_i and returns
-β_i/(1−ε) = y_i² f̄_d/(V_i |u−v|) = β̄/((1−ε) y_i); y = 1 is the monodisperse law.
+(ref. 8 of the DEM book 2012 two-phase chapters). In a mixture, the polydisperse rule f_di = y_i² f̄_d
+(DEM book 2012 chapter, van der Hoef et al. 2005, eqs 10-12) that van der Hoef and Beetstra derived
+with this closure is applied to every law by ``_dispatch.beta_per_solids``.
 
 Valid: 0.1 ≲ φ ≲ 0.6 and Re ≲ 1000 (the LB data); F → 1 as φ → 0 and Re → 0 (Stokes).
 """
@@ -43,16 +40,15 @@ def normalised_drag(eps, re):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def beta_per_solids(p, eps, slip, d, rho, mu, y):
-    """β_i/(1−ε) [kg m^-3 s^-1] for a particle of diameter d = y D̄ (DEM book 2012 eq. 12)."""
-    dm = d / y  # D̄, eq. 11
-    re = eps * rho * slip * dm / mu
-    return 18.0 * mu * eps * normalised_drag(eps, re) / (dm * dm) / y
+def beta_per_solids(p, eps, slip, d, rho, mu):
+    """β/(1−ε) [kg m^-3 s^-1] = 18 μ ε F/d² of a monodisperse bed of diameter d."""
+    re = eps * rho * slip * d / mu
+    return 18.0 * mu * eps * normalised_drag(eps, re) / (d * d)
 
 
 @drag_laws.register("beetstra")
 class Beetstra(DragLaw):
-    """Beetstra et al. 2007 LB drag; polydisperse through f_i = y_i² f̄ (DEM book 2012 eq. 12)."""
+    """Beetstra et al. 2007 LB drag (the reference pairing of the polydisperse y_i² rule, DEM book 2012 eq. 12)."""
 
     model: Literal["beetstra"] = "beetstra"
     code: ClassVar[int] = CODE

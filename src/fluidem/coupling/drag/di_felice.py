@@ -27,8 +27,8 @@ CODE = 3
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def beta_per_solids(p, eps, slip, d, rho, mu, y):
-    """β/(1−ε) [kg m^-3 s^-1] of Di Felice 1994 (y unused)."""
+def beta_per_solids(p, eps, slip, d, rho, mu):
+    """β/(1−ε) [kg m^-3 s^-1] of Di Felice 1994."""
     re = eps * rho * slip * d / mu
     # C_D |u−v| = (0.63 √|u−v| + 4.8 √(μ/(ερd)))², finite at zero slip
     root = 0.63 * math.sqrt(slip) + 4.8 * math.sqrt(mu / (eps * rho * d))

@@ -24,8 +24,8 @@ SWITCH = 0.8  # Sun 2007 eq. 30: Ergun at and below, Wen–Yu above
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def beta_per_solids(p, eps, slip, d, rho, mu, y):
-    """β/(1−ε) [kg m^-3 s^-1], Sun 2007 eqs 30-31 (y unused)."""
+def beta_per_solids(p, eps, slip, d, rho, mu):
+    """β/(1−ε) [kg m^-3 s^-1], Sun 2007 eqs 30-31."""
     if eps <= SWITCH:
         return ergun_per_solids(eps, slip, d, rho, mu)  # Sun 2007 eq. 30, first line
     return wen_yu_per_solids(eps, slip, d, rho, mu, 2.7, 0.43)  # Sun 2007 eqs 30-31

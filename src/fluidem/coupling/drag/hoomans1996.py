@@ -24,8 +24,8 @@ SWITCH = 0.8  # Hoomans 1996 §3.2.2: Ergun below, Wen–Yu at and above
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def beta_per_solids(p, eps, slip, d, rho, mu, y):
-    """β/(1−ε) [kg m^-3 s^-1], Hoomans 1996 eqs 45-47 (y unused)."""
+def beta_per_solids(p, eps, slip, d, rho, mu):
+    """β/(1−ε) [kg m^-3 s^-1], Hoomans 1996 eqs 45-47."""
     if eps < SWITCH:
         return ergun_per_solids(eps, slip, d, rho, mu)  # Hoomans 1996 eq. 45
     return wen_yu_per_solids(eps, slip, d, rho, mu, 2.65, 0.44)  # Hoomans 1996 eqs 46-47, 38

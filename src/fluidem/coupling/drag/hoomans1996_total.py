@@ -36,8 +36,8 @@ EXPONENT = 3.7  # ε^(−4.7) of eq. 37 times the ε² of eq. 36, over the ε of
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def beta_per_solids(p, eps, slip, d, rho, mu, y):
-    """β/(1−ε) [kg m^-3 s^-1] of Hoomans 1996 eqs 35-39 (y unused): 3/4 C_d ρ |u−v| ε^(−2.7)/d."""
+def beta_per_solids(p, eps, slip, d, rho, mu):
+    """β/(1−ε) [kg m^-3 s^-1] of Hoomans 1996 eqs 35-39: 3/4 C_d ρ |u−v| ε^(−2.7)/d."""
     return wen_yu_per_solids(eps, slip, d, rho, mu, EXPONENT, 0.44)
 
 

@@ -25,8 +25,8 @@ CODE = 5
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def beta_per_solids(p, eps, slip, d, rho, mu, y):
-    """β/(1−ε) [kg m^-3 s^-1] of Koch & Hill 2001 (y unused)."""
+def beta_per_solids(p, eps, slip, d, rho, mu):
+    """β/(1−ε) [kg m^-3 s^-1] of Koch & Hill 2001."""
     phi = 1.0 - eps
     if phi <= 0.0:
         f0 = 1.0

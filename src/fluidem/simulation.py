@@ -15,6 +15,7 @@ import numpy as np
 
 from . import _threads
 from .analysis import fluidised as F
+from .analysis import mixing as M
 from .analysis import probes as P
 from .case import Case, validate_case
 from .errors import CaseError
@@ -182,6 +183,8 @@ class Simulation:
             self.observers["gas_fields"] = GasFieldWriter(self.out_dir, EveryTime(o.snapshot_interval or end / 100))
         probes = [lambda s: P.energies(s.engine), lambda s: s.engine.bookkeeping(), lambda s: P.contacts(s.engine),
                   F.bed_probes]
+        if len(self.case.particles.species) > 1:  # per-species heights, segregation and mixing indices
+            probes.append(M.mixing_probes)
         self.observers["probes"] = ProbeWriter(self.out_dir, probes, EveryTime(o.probe_interval or end / 1000))
         self.observers["checkpoint"] = Checkpointer(self.out_dir, EveryTime(o.checkpoint_interval or end / 10))
 

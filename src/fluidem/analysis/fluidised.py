@@ -261,7 +261,9 @@ AVERAGED = {  # probes.csv column → summary key of its time average
 
 
 def time_averages(probes_csv: str | Path, t_end: float) -> dict:
-    """Summary entries: time averages of the bed probes over ``averaging_window``, and the spectrum of the
+    """Summary entries: time averages of the bed probes over ``averaging_window`` (with a bed of several
+    species also of ``height_<species>_m``, ``segregation_index`` and ``lacey_index``, ``analysis.mixing``:
+    ``height_<species>_avg_m``, ``segregation_index_avg``, ``lacey_index_avg``), and the spectrum of the
     20 cm pressure drop there (``analysis.spectrum``): the frequency of its highest peak and its highest
     peaks with their relative heights, when the window holds enough samples for a spectrum."""
     path = Path(probes_csv)
@@ -274,7 +276,9 @@ def time_averages(probes_csv: str | Path, t_end: float) -> dict:
     t = cols["time_s"]
     sel = (t >= a - 1e-9) & (t <= b + 1e-9)
     out: dict = {"averages_window_s": [a, b], "averages_samples": int(sel.sum())}
-    for col, key in AVERAGED.items():
+    mixing = {c: (c[:-2] + "_avg_m" if c.endswith("_m") else c + "_avg") for c in cols
+              if (c.startswith("height_") and c.endswith("_m")) or c in ("segregation_index", "lacey_index")}
+    for col, key in {**AVERAGED, **mixing}.items():
         if col not in cols or not sel.any():
             continue
         vals = cols[col][sel]

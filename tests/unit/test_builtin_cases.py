@@ -1,6 +1,7 @@
 """Smoke run of every built-in case through the command line (short --until), as CI requires."""
 import json
 
+import numpy as np
 import pytest
 
 from fluidem.case import builtin_cases, load_case
@@ -55,3 +56,27 @@ def test_sun_case_summary_gives_the_largest_cell_contact_to_gas_force_ratio(name
     window = [v for t, v in rows if lo - 1e-9 <= t <= hi + 1e-9]
     assert len(window) >= 2
     assert summary["contact_drag_ratio_max_avg"] == pytest.approx(np.mean(window), rel=1e-9)
+
+
+def test_a_binary_bed_reports_its_species_and_draws_their_segregation(tmp_path):
+    """A bed of two species: probes.csv has each species' height and the segregation and Lacey indices
+    (``analysis.mixing``), the summary their averages, and ``fluidem plot`` the ``segregation`` figure."""
+    from fluidem.analysis.mixing import segregation_index
+    from fluidem.io.probes_csv import read_probes
+
+    out = tmp_path / "run"
+    assert main(["run", "binary-size", "--until", "0.005", "--set", "output.probe_interval=0.001", "--out", str(out),
+                 "--quiet"]) == 0
+    probes = read_probes(out / "probes.csv")
+    small, large = probes["height_small_m"], probes["height_large_m"]
+    np.testing.assert_allclose(probes["segregation_index"], [segregation_index(a, b) for a, b in zip(small, large)],
+                               rtol=1e-7)  # of heights written to 10 significant digits, 1 % apart
+    assert len(small) == 6
+    assert np.all((probes["lacey_index"] > 0.5) & (probes["lacey_index"] < 1.5))  # filled at random: mixed
+    summary = json.loads((out / "summary.json").read_text())
+    a, b = summary["averages_window_s"]
+    window = (probes["time_s"] >= a - 1e-9) & (probes["time_s"] <= b + 1e-9)
+    assert summary["segregation_index_avg"] == pytest.approx(np.mean(probes["segregation_index"][window]), rel=1e-9)
+    assert {"height_small_avg_m", "height_large_avg_m", "lacey_index_avg"} <= set(summary)
+    assert main(["plot", str(out), "--out", str(tmp_path / "fig"), "--quiet"]) == 0
+    assert (tmp_path / "fig" / "segregation.png").exists()

@@ -18,7 +18,8 @@ above the bottom centre), ``voidage`` and ``solids_fraction`` (``voidage.py``: g
 maps at chosen times with the particles over them, Hoomans Figs 10/12; time-averaged solids
 fraction map, Sun Figs 4/8/13) and ``forces`` (``forces.py``: contact and gas force per
 particle weight and their ratio on the gas grid, Sun Figs 7/12, from the particle snapshots'
-``contact_force`` and ``gas_force``). ``_shared.py`` holds the registry, the options, the time
+``contact_force`` and ``gas_force``), ``segregation`` (``mixing.py``: species heights, segregation and
+Lacey indices of a bed of several species, ``analysis.mixing``). ``_shared.py`` holds the registry, the options, the time
 selection and the axes the families share. The gas figures read ``gas.h5``
 (``fluidem.io.gas_fields``).
 """
@@ -43,13 +44,14 @@ from .bed import draw_bed_height
 from .pressure import draw_pressure, pressure_probe_cell
 from .voidage import draw_solids_fraction, draw_voidage
 from .forces import FORCE_FIELDS, ForceMaps, draw_forces, force_maps, lacks_forces
+from .mixing import draw_segregation
 
 __all__ = ["COLOR_MODES", "DEFAULT_PANELS", "FigureSpec", "PlotOptions", "PlotResult", "figure", "figures", "render",
            "plot_run", "parse_names", "parse_times", "parse_window", "select_snapshots", "averaging_window",
            "time_title", "View", "view_of", "Colourer", "draw_particles", "setup_particle_axes", "speed_max",
            "pressure_probe_cell", "power_spectrum", "FORCE_FIELDS", "ForceMaps", "force_maps",
            "draw_snapshots", "draw_energy", "draw_contacts", "draw_multicontact", "draw_bed_height",
-           "draw_pressure", "draw_voidage", "draw_solids_fraction", "draw_forces"]
+           "draw_pressure", "draw_voidage", "draw_solids_fraction", "draw_forces", "draw_segregation"]
 
 
 @dataclass

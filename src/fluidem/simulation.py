@@ -203,7 +203,8 @@ class Simulation:
         except KeyError as err:
             key = err.args[0] if err.args else "?"
             what = "array" if "/" in str(key) else "value"
-            hint = " (a checkpoint of a run without gas)" if str(key).startswith("gas/") else ""
+            no_gas = str(key).startswith("gas/") and not any(k.startswith("gas/") for k in arrays)
+            hint = " (it holds no gas arrays: a checkpoint of a run without gas?)" if no_gas else ""
             raise unusable(f"lacks the {what} {key!r} this case needs{hint}") from None
         except (ValueError, TypeError, IndexError) as err:
             raise unusable(f"does not fit this case ({err})") from None
@@ -547,8 +548,8 @@ def read_run_case(path: Path) -> Case:
             f"attribute case_toml, e.g. {path.with_name(RESTART_NAME)})")
 
     def unusable(reason):
-        return CheckpointError(f"{path}: {reason}{chr(10) if chr(10) in reason else '; '}{note}", path=path,
-                               reason=reason)
+        sep = "\n" if "\n" in reason else "; "  # a case's list of problems: the note on a line of its own
+        return CheckpointError(f"{path}: {reason}{sep}{note}", path=path, reason=reason)
 
     try:
         text = path.read_bytes().decode("utf-8")

@@ -164,7 +164,7 @@ def test_damaged_newest_checkpoint_resumes_from_the_previous(pour_runs, tmp_path
     previous_step = step_of(run_dir / PREVIOUS_RESTART_NAME)
     what = damage(run_dir / RESTART_NAME)
 
-    rc, out, err = cli(["run", "--resume", run_dir, "--until", POUR_END, "--quiet"], capsys)
+    rc, _, err = cli(["run", "--resume", run_dir, "--until", POUR_END, "--quiet"], capsys)
     assert rc == 0, err
     assert "Traceback" not in err
     warning = [line for line in err.splitlines() if line.startswith("WARNING:")]
@@ -206,7 +206,7 @@ def test_no_checkpoint_at_all_is_a_clear_error(pour_runs, tmp_path, capsys):
     (run_dir / RESTART_NAME).unlink()
     (run_dir / PREVIOUS_RESTART_NAME).unlink()
     before = folder_digest(run_dir)
-    rc, out, err = cli(["run", "--resume", run_dir, "--quiet"], capsys)
+    rc, _, err = cli(["run", "--resume", run_dir, "--quiet"], capsys)
     assert rc == 2 and "Traceback" not in err
     assert "no checkpoint" in err and RESTART_NAME in err and PREVIOUS_RESTART_NAME in err
     assert folder_digest(run_dir) == before
@@ -246,14 +246,14 @@ def test_full_disk_during_a_checkpoint_keeps_both_checkpoints(pour_runs, tmp_pat
         return real_create(group, name, *args, **kw)
 
     monkeypatch.setattr(h5py.Group, "create_dataset", full_disk)
-    rc, out, err = cli(["run", "--resume", run_dir, "--until", POUR_END, "--quiet"], capsys)
+    rc, _, err = cli(["run", "--resume", run_dir, "--until", POUR_END, "--quiet"], capsys)
     assert rc != 0 and "No space left on device" in err and "Traceback" not in err
     for name, data in before.items():
         assert (run_dir / name).read_bytes() == data, f"{name} changed by a failed checkpoint write"
     assert not [p for p in run_dir.iterdir() if p.name.endswith(".tmp")]
 
     monkeypatch.undo()
-    rc, out, err = cli(["run", "--resume", run_dir, "--until", POUR_END, "--quiet"], capsys)
+    rc, _, err = cli(["run", "--resume", run_dir, "--until", POUR_END, "--quiet"], capsys)
     assert rc == 0, err
     assert "WARNING" not in err
     assert_checkpoints_bitwise_equal(ref, run_dir)
@@ -290,7 +290,7 @@ def test_kill_before_the_first_periodic_checkpoint_writes_t0_once(tmp_path, caps
             "--set", "output.probe_interval=0.0005", "--set", "output.snapshot_interval=0.002"]
     run_dir, ref = tmp_path / "killed", tmp_path / "ref"
     kill_after_first_checkpoint(run_dir, argv)
-    rc, out, err = cli(["run", "--resume", run_dir, "--quiet"], capsys)
+    rc, _, err = cli(["run", "--resume", run_dir, "--quiet"], capsys)
     assert rc == 0, err
     steps = probe_steps(run_dir)
     assert steps.count(0) == 1 and len(steps) == len(set(steps))
@@ -311,7 +311,7 @@ def test_coupled_kill_before_the_first_periodic_checkpoint_writes_t0_once(tmp_pa
     argv = [*TSUJI, "--until", "0.005", "--set", "output.checkpoint_interval=1.0"]
     run_dir, ref = tmp_path / "killed", tmp_path / "ref"
     kill_after_first_checkpoint(run_dir, argv, rows=3)
-    rc, out, err = cli(["run", "--resume", run_dir, "--quiet"], capsys)
+    rc, _, err = cli(["run", "--resume", run_dir, "--quiet"], capsys)
     assert rc == 0, err
     assert probe_steps(run_dir).count(0) == 1
     for name in ("particles.h5", "gas.h5"):
@@ -337,7 +337,7 @@ def test_coupled_checkpoint_without_gas_arrays_resumes_from_the_previous(tmp_pat
         for k in [k for k in f["gas"]]:
             del f[f"gas/{k}"]
         del f.attrs["checksums"]
-    rc, out, err = cli(["run", "--resume", run_dir, "--until", "0.005", "--quiet"], capsys)
+    rc, _, err = cli(["run", "--resume", run_dir, "--until", "0.005", "--quiet"], capsys)
     assert rc == 0, err
     assert "lacks the array 'gas/" in err and PREVIOUS_RESTART_NAME in err and "run without gas" in err
 

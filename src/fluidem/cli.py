@@ -126,14 +126,16 @@ def build_parser() -> argparse.ArgumentParser:
 
     r = sub.add_parser("run", help="run a case (built-in name or TOML path)",
                        description="Run a case. Output goes to a run directory: case.toml, summary.json, probes.csv, "
-                                   "particles.h5 + particles.xdmf (ParaView), restart.h5.")
+                                   "particles.h5 + particles.xdmf (ParaView), restart.h5 + restart.prev.h5 (the newest "
+                                   "checkpoint and the one before).")
     r.add_argument("case", nargs="?", help="built-in case name (see `fluidem cases`) or a TOML file")
     r.add_argument("--until", type=float, help="simulated time to reach [s] (default: the case's time.end)")
     r.add_argument("--out", help="run directory (default runs/<case>-<timestamp>); must be new or empty")
     r.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="override a case key by dotted name, e.g. --set particles.contact.restitution=1.0")
     r.add_argument("--threads", type=int, help="compute threads (default: one per 1200 particles, at most all cores)")
-    r.add_argument("--resume", metavar="DIR", help="continue a stopped run from DIR/restart.h5")
+    r.add_argument("--resume", metavar="DIR",
+                   help="continue a stopped run from DIR/restart.h5 (DIR/restart.prev.h5 where that is damaged)")
     r.set_defaults(func=cmd_run)
 
     c = sub.add_parser("cases", help="list built-in cases")

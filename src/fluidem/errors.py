@@ -13,3 +13,17 @@ class CaseError(ValueError):
     def __init__(self, message: str, problems: list[tuple[tuple, object, str]] | None = None):
         super().__init__(message)
         self.problems = problems
+
+
+class CheckpointError(CaseError):
+    """A checkpoint (or the ``case.toml``) of a run directory that cannot be used to resume the run.
+
+    ``path``: the file; ``reason``: what is wrong with it, in words (``"missing"``, ``"not an HDF5 file
+    or truncated (…)"``, ``"lacks the array 'gas/p'"``). A subclass of ``CaseError``, so the command line
+    reports it in one line and exits with status 2.
+    """
+
+    def __init__(self, message: str, path=None, reason: str | None = None):
+        super().__init__(message)
+        self.path = path
+        self.reason = reason

@@ -18,16 +18,18 @@ from .analysis import fluidised as F
 from .analysis import mixing as M
 from .analysis import probes as P
 from .case import Case, validate_case
-from .errors import CaseError
+from .errors import CaseError, CheckpointError
 from .io.atomic import write_text_atomic
 from .io.gas_fields import GasFieldWriter
 from .io.probes_csv import ProbeWriter
-from .io.restart import RESTART_NAME, load_restart, save_restart
+from .io.restart import CHECKPOINT_NAMES, PREVIOUS_RESTART_NAME, RESTART_NAME, load_restart, save_restart
 from .io.summary import finite, summary_json
 from .io.snapshots import ParticleWriter
 from .particles import engine_for
 from .schedule import EveryTime
 from .state import ParticleState
+
+log = logging.getLogger(__name__)
 
 CHUNK_WALL_SECONDS = 0.25  # a compiled chunk should return to Python about this often (Ctrl-C, progress)
 
@@ -48,7 +50,8 @@ def seconds_since_process_start() -> float | None:
 
 
 class Checkpointer:
-    """Observer writing ``restart.h5`` atomically."""
+    """Observer writing ``restart.h5`` atomically, the checkpoint before it kept as ``restart.prev.h5``
+    (``Simulation.save_checkpoint``)."""
 
     def __init__(self, out_dir: Path, schedule):
         self.path = Path(out_dir) / RESTART_NAME
@@ -86,30 +89,30 @@ class Progress:
 class Simulation:
     """A run of a case: owns the engine and clock; optional run directory ``out_dir``.
 
-    ``resume=True`` continues from ``out_dir/restart.h5``.
+    ``resume=True`` continues from the newest usable checkpoint of ``out_dir``: ``restart.h5``, or
+    ``restart.prev.h5`` with a warning when ``restart.h5`` is missing or damaged (``checkpoint_used``
+    names the file); ``CheckpointError`` when neither can be used, with nothing in ``out_dir`` changed.
     """
 
     def __init__(self, case: Case, out_dir: str | Path | None = None, resume: bool = False, progress: bool = False):
         self.case = case
         self.out_dir = Path(out_dir) if out_dir is not None else None
         self.threads = _threads.set_threads(case.threads, sum(s.count for s in case.particles.species))
-        restart = None
+        self.checkpoint_used: Path | None = None  # the checkpoint a resumed run continued from
+        # the step of out_dir/restart.h5 as this object last wrote or read it; None: no file, or a damaged one
+        # (which the next checkpoint replaces without keeping it as restart.prev.h5)
+        self._checkpoint_step: int | None = None
+        scalars = None
         if resume:
-            if self.out_dir is None or not (self.out_dir / RESTART_NAME).exists():
-                raise CaseError(f"--resume {self.out_dir}: no {RESTART_NAME} there")
-            restart = load_restart(self.out_dir / RESTART_NAME)
-            state = ParticleState(**{k[len("state/"):]: v.copy() for k, v in restart[0].items() if k.startswith("state/")})
-            self.engine = engine_for(case, state=state)  # the restart file holds every particle
+            if self.out_dir is None:
+                raise CaseError("resume=True needs the run directory out_dir")
+            scalars = self._open_checkpoint()
         else:
             self.engine = engine_for(case)
             self.engine.check_initial_overlaps()
-        # the engine's total energy at t = 0 where it books it (hard spheres: Hoomans 1996 eq. 51's balance)
-        self.energy0 = self.engine.bookkeeping().get("total_energy_J")
-        self.gas = None
-        if case.gas is not None:  # two-way coupled run: gas steps of DT, DEM sub-steps within
-            from .coupling.exchange import GasCoupling
-
-            self.gas = GasCoupling(case, self.engine)
+            # the engine's total energy at t = 0 where it books it (hard spheres: Hoomans 1996 eq. 51's balance)
+            self.energy0 = self.engine.bookkeeping().get("total_energy_J")
+            self.gas = self._gas_coupling(self.engine)
         self.observers: dict = {}
         self.progress = Progress(case.output.progress_interval) if progress else None
         self.status = "created"
@@ -125,11 +128,88 @@ class Simulation:
         if self.out_dir is not None:
             self._prepare_run_directory(resume)
             self._default_observers()
-            if restart is not None:
-                self._restore(*restart[:2])
-                for obs in self.observers.values():
-                    if hasattr(obs, "truncate_after"):
-                        obs.truncate_after(self.steps)
+        if scalars is not None:
+            self._restore_run(scalars)
+            # the outputs up to the checkpoint's step stay: its observers fired before the checkpoint was
+            # written. At step 0, ``run`` fires every observer again, so nothing stays (t = 0 once).
+            keep = self.steps if self.steps > 0 else -1
+            for obs in self.observers.values():
+                if hasattr(obs, "truncate_after"):
+                    obs.truncate_after(keep)
+
+    def _gas_coupling(self, engine):
+        """The two-way coupling of a case with a gas (gas steps of DT, DEM sub-steps within); None without."""
+        if self.case.gas is None:
+            return None
+        from .coupling.exchange import GasCoupling
+
+        return GasCoupling(self.case, engine)
+
+    def _open_checkpoint(self) -> dict:
+        """Build the engine (and gas) from the newest usable checkpoint of ``out_dir``; its scalars.
+
+        ``restart.h5`` first, then ``restart.prev.h5``; a checkpoint that cannot be read or does not fit
+        the case (an array missing, another shape) is passed over with a warning. ``CheckpointError``
+        naming each file and what is wrong with it when none is usable; nothing is written here."""
+        problems: list[CheckpointError] = []
+        for name in CHECKPOINT_NAMES:
+            path = self.out_dir / name
+            try:
+                arrays, scalars, _ = load_restart(path)
+                self._build_from_checkpoint(path, arrays, scalars)
+            except CheckpointError as err:
+                problems.append(err)
+                continue
+            self.checkpoint_used = path
+            self._checkpoint_step = self.steps if name == RESTART_NAME else None
+            if problems:
+                log.warning("%s: %s; resuming from the previous checkpoint %s at t = %.6g s (step %d) instead. "
+                            "Outputs after that time are dropped and computed again; the next checkpoint "
+                            "replaces %s", problems[0].path, problems[0].reason, path, self.time, self.steps,
+                            RESTART_NAME)
+            return scalars
+        if all(p.reason == "missing" for p in problems):
+            raise CheckpointError(f"--resume {self.out_dir}: no checkpoint there ({' nor '.join(CHECKPOINT_NAMES)}); "
+                                  f"a run writes its first one at t = 0, so this one stopped before it or is not a "
+                                  f"run directory. Start the run again with `fluidem run` and a new --out",
+                                  path=self.out_dir, reason="missing")
+        lines = "; ".join(f"{p.path}: {p.reason}" for p in problems)
+        raise CheckpointError(f"--resume {self.out_dir}: no usable checkpoint, so the run cannot be resumed "
+                              f"({lines}). Nothing was changed in {self.out_dir}; start the run again with "
+                              f"`fluidem run` and a new --out", path=self.out_dir,
+                              reason="no usable checkpoint")
+
+    def _build_from_checkpoint(self, path: Path, arrays: dict, scalars: dict) -> None:
+        """Engine and gas coupling of the case, continued from a checkpoint's arrays and scalars; a
+        ``CheckpointError`` when they do not fit the case (an array missing or of another shape)."""
+        from dataclasses import fields
+
+        def unusable(reason):
+            return CheckpointError(f"checkpoint {path}: {reason}", path=path, reason=reason)
+
+        required = [f"state/{f.name}" for f in fields(ParticleState) if f.name != "ids"]
+        missing = [k for k in required if k not in arrays]
+        if missing:
+            raise unusable(f"lacks the array{'s' if len(missing) > 1 else ''} {', '.join(missing)}")
+        try:
+            state = ParticleState(**{k[len("state/"):]: v.copy() for k, v in arrays.items() if k.startswith("state/")})
+            engine = engine_for(self.case, state=state)  # the restart file holds every particle
+            # the engine's total energy at t = 0 where it books it (hard spheres: Hoomans 1996 eq. 51's balance);
+            # a checkpoint's own value, where it has one, replaces it (``_restore_run``)
+            energy0 = engine.bookkeeping().get("total_energy_J")
+            gas = self._gas_coupling(engine)
+            engine.restore(arrays, scalars)
+            if gas is not None:
+                gas.restore(arrays, scalars)
+        except KeyError as err:
+            key = err.args[0] if err.args else "?"
+            what = "array" if "/" in str(key) else "value"
+            no_gas = str(key).startswith("gas/") and not any(k.startswith("gas/") for k in arrays)
+            hint = " (it holds no gas arrays: a checkpoint of a run without gas?)" if no_gas else ""
+            raise unusable(f"lacks the {what} {key!r} this case needs{hint}") from None
+        except (ValueError, TypeError, IndexError) as err:
+            raise unusable(f"does not fit this case ({err})") from None
+        self.engine, self.energy0, self.gas = engine, energy0, gas
 
     # ------------------------------------------------------------ clock
     @property
@@ -408,6 +488,14 @@ class Simulation:
 
     # ------------------------------------------------------------ checkpoints
     def save_checkpoint(self, path: Path) -> None:
+        """Write a checkpoint to ``path`` atomically. The run directory's ``restart.h5`` keeps the checkpoint
+        before it as ``restart.prev.h5`` when this one is of a later step (one of the same step, as at the
+        end of a run after the periodic one, replaces it alone)."""
+        path = Path(path)
+        previous = None
+        own = self.out_dir is not None and path == self.out_dir / RESTART_NAME
+        if own and self._checkpoint_step is not None and self._checkpoint_step < self.steps:
+            previous = self.out_dir / PREVIOUS_RESTART_NAME
         scalars = dict(self.engine.checkpoint_scalars(), wall_time=self.wall_time, particle_steps=self.particle_steps,
                        particle_seconds=self.particle_seconds, gas_seconds=self.gas_seconds,
                        output_seconds=self.output_seconds)
@@ -417,9 +505,12 @@ class Simulation:
         if self.gas is not None:
             arrays = {**arrays, **self.gas.checkpoint_arrays()}
             scalars.update(self.gas.checkpoint_scalars())
-        save_restart(path, arrays, scalars, self.case.to_toml())
+        save_restart(path, arrays, scalars, self.case.to_toml(), previous=previous)
+        if own:
+            self._checkpoint_step = self.steps
 
     def load_checkpoint(self, path: Path) -> None:
+        """Continue from the checkpoint ``path`` (``CheckpointError`` when it cannot be read)."""
         arrays, scalars, _ = load_restart(path)
         self._restore(arrays, scalars)
 
@@ -427,6 +518,10 @@ class Simulation:
         self.engine.restore(arrays, scalars)
         if self.gas is not None:
             self.gas.restore(arrays, scalars)
+        self._restore_run(scalars)
+
+    def _restore_run(self, scalars) -> None:
+        """The run's own figures from a checkpoint's scalars (wall and split times, particle steps, E_0)."""
         self.wall_time = float(scalars.get("wall_time", 0.0))
         for k in ("particle_seconds", "gas_seconds", "output_seconds"):  # absent from checkpoints before 2026-11-26
             setattr(self, k, float(scalars.get(k, 0.0)))
@@ -437,12 +532,40 @@ class Simulation:
     @classmethod
     def resume(cls, out_dir: str | Path, progress: bool = False, threads: int | None = None) -> "Simulation":
         """Continue the run in ``out_dir`` from its last checkpoint (optionally with another thread count)."""
-        import tomllib
-
         out_dir = Path(out_dir)
         if not (out_dir / "case.toml").exists():
             raise CaseError(f"--resume {out_dir}: not a run directory (no case.toml)")
-        case = validate_case(tomllib.loads((out_dir / "case.toml").read_text()))
+        case = read_run_case(out_dir / "case.toml")
         if threads is not None:
             case.threads = threads
         return cls(case, out_dir=out_dir, resume=True, progress=progress)
+
+
+def read_run_case(path: Path) -> Case:
+    """The case of a run directory from its ``case.toml``; ``CheckpointError`` naming the file and what is
+    wrong with it (not text, not TOML, not a valid case) where it cannot be used."""
+    import tomllib
+
+    path = Path(path)
+    note = (f"the run cannot be resumed without it (each checkpoint keeps a copy of the case in its "
+            f"attribute case_toml, e.g. {path.with_name(RESTART_NAME)})")
+
+    def unusable(reason):
+        sep = "\n" if "\n" in reason else "; "  # a case's list of problems: the note on a line of its own
+        return CheckpointError(f"{path}: {reason}{sep}{note}", path=path, reason=reason)
+
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as err:
+        raise unusable(f"not a text file (byte 0x{err.object[err.start]:02x} at position {err.start} "
+                       f"is not UTF-8)") from None
+    except OSError as err:
+        raise unusable(f"cannot be read ({err.strerror or err})") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise unusable(f"not valid TOML ({err})") from None
+    try:
+        return validate_case(data)
+    except CaseError as err:
+        raise unusable(f"not a valid case: {err}") from None

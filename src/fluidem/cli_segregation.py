@@ -90,7 +90,8 @@ def _compositions(text: str | None) -> list[float]:
 
 
 def cmd_segregation(args) -> int:
-    from .analysis.segregation import _check_voidage, _number as _finite, _positive
+    from .analysis.segregation import _check_voidage, _positive
+    from .analysis.segregation import _number as _finite
 
     voidage = _check_option("--voidage", _number("--voidage", args.voidage), _check_voidage)
     viscosity = _check_option("--viscosity", _number("--viscosity", args.viscosity),

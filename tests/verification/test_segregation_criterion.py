@@ -18,9 +18,14 @@ import pytest
 from scipy.optimize import brentq
 
 from fluidem import CaseError, segregation_criterion
-from fluidem.analysis.segregation import (equilibrium_density_ratio, equilibrium_mean_density_ratio,
-                                          minimum_fluidisation_velocity, mixture_density, sauter_mean_diameter,
-                                          viscous_drag)
+from fluidem.analysis.segregation import (
+    equilibrium_density_ratio,
+    equilibrium_mean_density_ratio,
+    minimum_fluidisation_velocity,
+    mixture_density,
+    sauter_mean_diameter,
+    viscous_drag,
+)
 
 ROUND_OFF = 1e-13  # a few hundred ulps: each quantity is a handful of products and quotients
 

@@ -42,7 +42,7 @@ __all__ = ["SegregationResult", "segregation_criterion", "sauter_mean_diameter",
 # --- input checks: each error names the argument and its value -------------------------------------
 
 def _number(name: str, value) -> float:
-    if isinstance(value, (bool, np.bool_)) or isinstance(value, str):
+    if isinstance(value, (bool, np.bool_, str)):
         raise CaseError(f"{name} = {value!r}: give a number", [((name,), value, "not a number")])
     try:
         out = float(value)

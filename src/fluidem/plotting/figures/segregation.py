@@ -13,9 +13,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...analysis.segregation import (CHART_COMPOSITIONS, FIG1_VOIDAGE, SegregationResult,
-                                     equilibrium_density_ratio, equilibrium_mean_density_ratio,
-                                     segregation_criterion)
+from ...analysis.segregation import (
+    CHART_COMPOSITIONS,
+    FIG1_VOIDAGE,
+    SegregationResult,
+    equilibrium_density_ratio,
+    equilibrium_mean_density_ratio,
+    segregation_criterion,
+)
 from ...errors import CaseError
 from .. import style
 

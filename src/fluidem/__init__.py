@@ -20,6 +20,9 @@ A case can also be built in Python from the objects the TOML loader builds::
         time=fd.Time(end=1.5),
         output=fd.Output(snapshot_interval=0.02, probe_interval=0.005))
 
+``fd.segregation_criterion(diameters, densities, composition, voidage)`` says which species of a
+fluidised binary mixture rises (Di Renzo & Di Maio 2012; ``fluidem.analysis.segregation``).
+
 ``fd.contact`` holds the contact laws (``fd.contact.HertzMindlin``, ...), ``fd.drag`` the drag
 closures (``fd.drag.Beetstra``, ...), ``fd.gas`` the gas solver and its boundary conditions
 (``fd.gas.Inflow``, ...). A coupled case adds ``gas=fd.Gas(grid=fd.gas.Grid(cells=..., size=...,
@@ -55,6 +58,7 @@ from .case import (  # noqa: E402
     WallPairContact,
     load_case,
 )
+from .analysis.segregation import segregation_criterion  # noqa: E402
 from .coupling import drag  # noqa: E402
 from .coupling.schema import CouplingSection as Coupling  # noqa: E402
 from .coupling.voidage import VoidageMapping  # noqa: E402
@@ -97,5 +101,5 @@ def __dir__():
 __all__ = [
     "Case", "Particles", "Species", "Wall", "Time", "Output", "Placement", "Neighbours", "Motion",
     "SizeDistribution", "PairContact", "WallPairContact", "WallContact",
-    "Gas", "Coupling", "VoidageMapping", "contact", "drag", "gas", "load_case", "CaseError", "Every", "EveryTime", "Simulation", "__version__",
+    "Gas", "Coupling", "VoidageMapping", "contact", "drag", "gas", "load_case", "CaseError", "segregation_criterion", "Every", "EveryTime", "Simulation", "__version__",
 ]

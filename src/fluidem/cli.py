@@ -1,4 +1,5 @@
-"""The ``fluidem`` command: run, cases, bench (and plot, animate, compare, report from ``cli_plot``).
+"""The ``fluidem`` command: run, cases, bench (and plot, animate, compare, report from ``cli_plot``;
+segregation from ``cli_segregation``).
 
 Bad input exits with status 2 and a message naming the key and value; nothing is
 written. Ctrl-C stops a run at the next chunk with a checkpoint (exit 130); resume
@@ -158,6 +159,9 @@ def build_parser() -> argparse.ArgumentParser:
     from .cli_plot import add_commands
 
     add_commands(sub)
+    from .cli_segregation import add_command as add_segregation
+
+    add_segregation(sub)
     for command in sub.choices.values():
         _add_verbosity(command, defaults=False)
     return p

@@ -154,7 +154,9 @@ def build_parser() -> argparse.ArgumentParser:
     b.set_defaults(func=cmd_bench)
 
     from .cli_plot import add_commands
+    from .cli_sweep import add_command as add_sweep
 
+    add_sweep(sub)
     add_commands(sub)
     for command in sub.choices.values():
         _add_verbosity(command, defaults=False)

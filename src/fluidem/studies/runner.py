@@ -44,7 +44,10 @@ def write_definition(study: StudyDefinition, folder: str | Path) -> None:
     folder = Path(folder)
     try:
         folder.mkdir(parents=True, exist_ok=True)
-        write_text_atomic(folder / STUDY_FILE, study.to_toml())
+        text = study.to_toml()
+        path = folder / STUDY_FILE
+        if not path.is_file() or path.read_text() != text:  # a rerun of the same study leaves it as it was
+            write_text_atomic(path, text)
     except OSError as err:
         raise CaseError(f"--out {str(folder)!r}: cannot write the study there: {err.strerror or err}") from None
 

@@ -246,11 +246,12 @@ def start_sweep(study: Path, until: str, cwd: Path) -> subprocess.Popen:
 
 
 def wait_for_first_member(proc, study: Path, timeout: float = 90.0) -> str:
+    """The name of the first member to complete, once a second one is running with a checkpoint."""
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
-        for d in sorted(study.glob("restitution=*")):
-            if member_state(d).status == "completed":
-                return d.name
+        states = {d.name: member_state(d).status for d in sorted(study.glob("restitution=*"))}
+        if "completed" in states.values() and "interrupted" in states.values():
+            return next(n for n, s in states.items() if s == "completed")
         if proc.poll() is not None:
             pytest.fail(f"the sweep ended before its first member: {proc.communicate()}")
         time.sleep(0.05)
@@ -276,12 +277,11 @@ def test_killed_sweep_resumes_without_rerunning_finished_members(tmp_path):
     assert [r["status"] for r in rows] == ["completed"] * 3
     assert out.splitlines()[0].startswith("member,") and len(out.splitlines()) == 4
     # a member killed while running went on from its checkpoint to the run it would have been
-    for name in [n for n, s in states.items() if s == "interrupted"][:1]:
-        e = name.split("=")[1]
-        rc, _, err = cli(["run", "pour", "--until", "0.1", "--threads", "1", "--quiet", "--out", tmp_path / "alone",
-                          "--set", f"particles.contact.restitution={e}"])
-        assert rc == 0, err
-        assert_same_run(study / name, tmp_path / "alone")
+    name = next(n for n, s in states.items() if s == "interrupted")
+    rc, _, err = cli(["run", "pour", "--until", "0.1", "--threads", "1", "--quiet", "--out", tmp_path / "alone",
+                      "--set", f"particles.contact.restitution={name.split('=')[1]}"])
+    assert rc == 0, err
+    assert_same_run(study / name, tmp_path / "alone")
 
 
 def test_ctrl_c_stops_the_study_and_keeps_finished_members(tmp_path):

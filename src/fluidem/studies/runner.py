@@ -89,8 +89,18 @@ def sweep(case, vary: dict[str, Any] | None = None, seeds: int | list[int] | Non
     scheduler : address of a running Dask scheduler, e.g. ``"tcp://10.0.0.5:8786"``.
     retry : run failed members again.
 
-    A member that fails is a row with status ``failed`` and its error. Raises ``CaseError`` for bad input
-    (nothing written) and ``KeyboardInterrupt`` after a Ctrl-C (the table written with what is done).
+    Returns
+    -------
+    pandas.DataFrame
+        ``study.csv``: one row per member; a member that failed has status ``failed`` and its error.
+
+    Raises
+    ------
+    CaseError
+        Bad input: an unknown key, a refused value, another study in ``out``, an unreachable scheduler
+        (nothing written).
+    KeyboardInterrupt
+        After Ctrl-C, once the running members wrote their checkpoints and the table is written.
     """
     from .definition import parse_seeds
 

@@ -417,3 +417,10 @@ def test_python_api_returns_the_table(study4):
     assert (frame["status"] == "completed").all()
     assert frame["particles.contact.restitution"].tolist() == [0.8, 0.8, 0.9, 0.9]
     assert load_case("pour").particles.placement.seed == 1996  # the case's own seed when --seeds is not given
+
+
+def test_the_test_and_sweep_extras_bring_dask_and_pandas():
+    project = tomllib.loads((SRC.parent / "pyproject.toml").read_text())["project"]
+    for extra in ("test", "sweep"):
+        names = {r.split(">")[0].split("=")[0].strip() for r in project["optional-dependencies"][extra]}
+        assert {"dask[distributed]", "pandas"} <= names, extra

@@ -12,12 +12,11 @@ from __future__ import annotations
 import logging
 import signal
 
-from .errors import CaseError
 
 log = logging.getLogger("fluidem.cli")
 
 EXAMPLE = ("fluidem sweep hoomans-orifice --vary particles.contact.restitution=0.8,0.9,0.95,1.0 "
-           "--vary particles.contact.friction=0,0.1,0.3 --seeds 3 --out studies/orifice")
+           "--vary particles.contact.friction=0,0.1,0.3 --seeds 3 --until 1.5 --out studies/orifice")
 
 
 def cmd_sweep(args) -> int:
@@ -62,7 +61,7 @@ def add_command(subparsers) -> None:
                     "status, error and every summary scalar), study.toml the definition. Rerun the same command "
                     "to skip finished members and resume interrupted ones. Example: " + EXAMPLE)
     s.add_argument("case", metavar="CASE", help="built-in case name (see `fluidem cases`) or a TOML file")
-    s.add_argument("--vary", action="append", metavar="KEY=V1,V2,...", required=True,
+    s.add_argument("--vary", action="append", metavar="KEY=V1,V2,...",
                    help="a case key by dotted name and its values, e.g. --vary particles.contact.friction=0,0.1,0.3; "
                         "repeat for more keys (every combination, or --zip)")
     s.add_argument("--zip", action="store_true",

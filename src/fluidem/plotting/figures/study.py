@@ -163,9 +163,17 @@ def draw_scalar(study: StudyData, scalar: Scalar):
     if study.definition.combine == "zip" and len(keys) > 1:
         fig = style.new_figure(max(PANEL_IN[0], 0.9 * len(groups)), PANEL_IN[1] + 0.4)
         _zip_panel(fig.add_subplot(1, 1, 1), study, scalar, groups)
-    elif len(keys) <= 1:
+    elif not keys:  # seeds only: each member against its seed
         fig = style.new_figure(*PANEL_IN)
-        _line_panel(fig.add_subplot(1, 1, 1), study, scalar, groups, {}, keys[0] if keys else None, None)
+        ax = fig.add_subplot(1, 1, 1)
+        seeds = [r.get("seed") for r in study.rows]
+        ax.plot(seeds, scalar.values, marker="o", linestyle="none", color=style.LINE_COLOURS[0])
+        ax.set_xticks(seeds, [str(s) for s in seeds])
+        ax.set_xlabel("placement seed")
+        ax.set_ylabel(_ylabel(scalar))
+    elif len(keys) == 1:
+        fig = style.new_figure(*PANEL_IN)
+        _line_panel(fig.add_subplot(1, 1, 1), study, scalar, groups, {}, keys[0], None)
     elif len(keys) == 2:
         fig = style.new_figure(2 * PANEL_IN[0] + 0.6, PANEL_IN[1])
         _line_panel(fig.add_subplot(1, 2, 1), study, scalar, groups, {}, keys[0], keys[1])

@@ -6,6 +6,7 @@ Public surface::
     case = fd.load_case("pour", {"particles.contact.restitution": 1.0})
     sim = fd.Simulation(case, out_dir="runs/pour")
     sim.run(until=0.5)
+    table = fd.sweep("pour", vary={"particles.contact.restitution": [0.8, 1.0]}, until=0.5, out="studies/pour")
 
 A case can also be built in Python from the objects the TOML loader builds::
 
@@ -91,15 +92,20 @@ def __getattr__(name):
         from .simulation import Simulation
 
         return Simulation
+    if name == "sweep":  # lazily too: a study needs Dask only when it runs
+        from .studies import sweep
+
+        return sweep
     raise AttributeError(f"module 'fluidem' has no attribute {name!r}")
 
 
 def __dir__():
-    return sorted(set(globals()) | {"Simulation"})
+    return sorted(set(globals()) | {"Simulation", "sweep"})
 
 
 __all__ = [
     "Case", "Particles", "Species", "Wall", "Time", "Output", "Placement", "Neighbours", "Motion",
     "SizeDistribution", "PairContact", "WallPairContact", "WallContact",
-    "Gas", "Coupling", "VoidageMapping", "contact", "drag", "gas", "load_case", "CaseError", "segregation_criterion", "Every", "EveryTime", "Simulation", "__version__",
+    "Gas", "Coupling", "VoidageMapping", "contact", "drag", "gas", "load_case", "CaseError", "segregation_criterion",
+    "Every", "EveryTime", "Simulation", "sweep", "__version__",
 ]

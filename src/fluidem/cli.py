@@ -157,7 +157,9 @@ def build_parser() -> argparse.ArgumentParser:
     b.set_defaults(func=cmd_bench)
 
     from .cli_plot import add_commands
+    from .cli_sweep import add_command as add_sweep
 
+    add_sweep(sub)
     add_commands(sub)
     from .cli_segregation import add_command as add_segregation
 

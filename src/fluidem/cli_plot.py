@@ -47,9 +47,19 @@ def _note(command: str, name: str, why: str) -> None:
     log.info("fluidem %s: skipped %s: %s", command, name, why)
 
 
+def _is_study(path) -> bool:
+    from .plotting.study import is_study
+
+    return is_study(path)
+
+
 @_shows_notes
 def cmd_plot(args) -> int:
     _require_matplotlib("plot")
+    if _is_study(args.run):
+        from .cli_plot_study import plot_study_command
+
+        return plot_study_command(args)
     from .plotting.figures import PlotOptions, parse_names, parse_times, parse_window, plot_run
     from .plotting.run import RunData
     from .plotting.style import parse_formats
@@ -102,6 +112,10 @@ def cmd_compare(args) -> int:
 @_shows_notes
 def cmd_report(args) -> int:
     _require_matplotlib("report")
+    if _is_study(args.run):
+        from .cli_plot_study import report_study_command
+
+        return report_study_command(args)
     from .plotting.figures import PlotOptions
     from .plotting.report import write_report
     from .plotting.run import RunData
@@ -120,7 +134,8 @@ def add_commands(subparsers) -> None:
         "plot", help="figures of a run (snapshots, energy, contacts, bed height, pressure, gas and force maps, …)",
         description="Write the figures that apply to a run directory. A figure whose quantity the run "
                     "lacks is skipped with a one-line note.")
-    p.add_argument("run", metavar="RUN", help="run directory (made by `fluidem run --out RUN`)")
+    p.add_argument("run", metavar="RUN", help="run directory (made by `fluidem run --out RUN`), or a study folder "
+                                              "(`fluidem sweep --out STUDY`): each summary scalar against the varied keys")
     p.add_argument("--times", metavar="T1,T2,...",
                    help="snapshot times [s] to draw (nearest snapshot each); default: 4 evenly spaced, "
                         "first and last included")
@@ -163,7 +178,7 @@ def add_commands(subparsers) -> None:
     r = subparsers.add_parser("report", help="one self-contained HTML page of a run",
                               description="Write one HTML page (no external files) with the case, the summary, "
                                           "published numbers for built-in seed cases, and every figure.")
-    r.add_argument("run", metavar="RUN", help="run directory")
+    r.add_argument("run", metavar="RUN", help="run directory, or a study folder (`fluidem sweep --out STUDY`)")
     r.add_argument("--color", choices=COLOR_CHOICES, default="height", help="particle colour in the snapshots")
     r.add_argument("--out", metavar="FILE.html", help="output file (default RUN/report.html)")
     r.set_defaults(func=cmd_report)

@@ -24,7 +24,7 @@ Vec3 = tuple[float, float, float]
 
 
 class Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", validate_assignment=True)
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, validate_assignment=True)
 
 
 # every registered contact law, chosen by its ``model`` key (the registry is the only list of models)
@@ -57,7 +57,8 @@ class Species(Strict):
     name: str = Field("particles", description="species name (pairs, wall_pairs and the output refer to it)")
     diameter: float = Field(gt=0.0, description="diameter [m] (the mean if a size_distribution is given)")
     density: float = Field(gt=0.0, description="material density [kg/m^3]")
-    count: int = Field(ge=0, description="number of particles")
+    count: int = Field(ge=1, description="number of particles (at least 1; with placement.method = 'file', the "
+                                         "file's rows of this species)")
     size_distribution: SizeDistribution | None = Field(None, description="diameters drawn from a distribution; "
                                                                          "default all equal to diameter")
     youngs_modulus: float | None = Field(None, gt=0.0, description="E [Pa] for Hertz–Mindlin (default: the contact's)")
@@ -394,6 +395,8 @@ def format_validation_error(err: ValidationError) -> str:
             key = str(ctx.get("discriminator", "model")).strip("'")
             _, model = _resolve(loc)
             lines.append(f"{shown}: needs a {key!r} key" + _choices(loc, key))
+        elif e["type"] == "finite_number":
+            lines.append(f"{shown} = {e['input']!r}: must be a finite number (NaN and ±inf are not allowed)")
         else:
             msg = e["msg"].removeprefix("Value error, ")
             value = e.get("input")
@@ -432,8 +435,18 @@ def read_case_data(name_or_path: str | Path) -> dict:
         raise CaseError(
             f"case {str(name_or_path)!r} is neither a TOML file nor a built-in case; built-in: {', '.join(sorted(builtin))}"
         )
+    if path.is_dir():
+        raise CaseError(f"case {str(name_or_path)!r} is a folder; give a TOML case file or a built-in case name")
     try:
-        data = tomllib.loads(path.read_text())
+        text = path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as err:
+        line = path.read_bytes()[:err.start].count(b"\n") + 1
+        raise CaseError(f"case file {path}: not a text (UTF-8) file: byte {err.object[err.start]:#04x} on line {line} "
+                        "cannot be decoded; a case file is TOML text") from None
+    except OSError as err:
+        raise CaseError(f"case file {path}: cannot be read: {err.strerror or err}") from None
+    try:
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise CaseError(f"case file {path}: not valid TOML: {err}") from None
     # a placement file named relative to the case file is found beside it

@@ -85,10 +85,13 @@ class Progress:
 class Simulation:
     """A run of a case: owns the engine and clock; optional run directory ``out_dir``.
 
-    ``resume=True`` continues from ``out_dir/restart.h5``.
+    ``resume=True`` continues from ``out_dir/restart.h5``; ``until`` (default the case's ``time.end``) is then
+    where the resumed run is to go, and a checkpoint already there is refused (CaseError) before any file
+    of the run directory is touched.
     """
 
-    def __init__(self, case: Case, out_dir: str | Path | None = None, resume: bool = False, progress: bool = False):
+    def __init__(self, case: Case, out_dir: str | Path | None = None, resume: bool = False, progress: bool = False,
+                 until: float | None = None):
         self.case = case
         self.out_dir = Path(out_dir) if out_dir is not None else None
         self.threads = _threads.set_threads(case.threads, sum(s.count for s in case.particles.species))
@@ -97,6 +100,7 @@ class Simulation:
             if self.out_dir is None or not (self.out_dir / RESTART_NAME).exists():
                 raise CaseError(f"--resume {self.out_dir}: no {RESTART_NAME} there")
             restart = load_restart(self.out_dir / RESTART_NAME)
+            self._check_resume_target(restart[1], until)
             state = ParticleState(**{k[len("state/"):]: v.copy() for k, v in restart[0].items() if k.startswith("state/")})
             self.engine = engine_for(case, state=state)  # the restart file holds every particle
         else:
@@ -149,6 +153,16 @@ class Simulation:
         return self.engine.state
 
     # ------------------------------------------------------------ run directory
+    def _check_resume_target(self, scalars: dict, until: float | None) -> None:
+        """CaseError if the checkpoint ``scalars`` are already at or past ``until`` (default ``time.end``):
+        a resume there would take no step."""
+        steps, dt = int(scalars.get("steps", 0)), float(scalars.get("dt", 0.0))
+        target = self.case.time.end if until is None else until
+        if dt > 0 and int(round(target / dt)) <= steps:
+            asked = f"--until {target:g}" if until is not None else f"its time.end = {target:g} s"
+            raise CaseError(f"--resume {self.out_dir}: the run is already at t = {steps * dt:.6g} s >= {asked}; "
+                            f"give a later --until to continue it")
+
     def _prepare_run_directory(self, resume: bool) -> None:
         out = self.out_dir
         if resume:
@@ -228,6 +242,8 @@ class Simulation:
     def run(self, until: float | None = None) -> dict:
         """Advance to simulated time ``until`` (default the case's end), firing observers; returns the summary."""
         until = self.case.time.end if until is None else until
+        if not math.isfinite(until):
+            raise CaseError(f"until = {until!r}: must be a finite number of simulated seconds")
         target = int(round(until / self.dt))
         self._run_wall_start = _time.perf_counter()
         self._run_time_start = self.time
@@ -432,14 +448,19 @@ class Simulation:
             self.energy0 = float(scalars["energy0"])
 
     @classmethod
-    def resume(cls, out_dir: str | Path, progress: bool = False, threads: int | None = None) -> "Simulation":
-        """Continue the run in ``out_dir`` from its last checkpoint (optionally with another thread count)."""
+    def resume(cls, out_dir: str | Path, progress: bool = False, threads: int | None = None,
+               until: float | None = None) -> "Simulation":
+        """Continue the run in ``out_dir`` from its last checkpoint (optionally with another thread count) to
+        ``until`` (default the case's ``time.end``; CaseError if the checkpoint is already there)."""
         import tomllib
 
         out_dir = Path(out_dir)
         if not (out_dir / "case.toml").exists():
             raise CaseError(f"--resume {out_dir}: not a run directory (no case.toml)")
-        case = validate_case(tomllib.loads((out_dir / "case.toml").read_text()))
+        try:
+            case = validate_case(tomllib.loads((out_dir / "case.toml").read_text()))
+        except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as err:
+            raise CaseError(f"--resume {out_dir}: its case.toml cannot be read: {err}") from None
         if threads is not None:
             case.threads = threads
-        return cls(case, out_dir=out_dir, resume=True, progress=progress)
+        return cls(case, out_dir=out_dir, resume=True, progress=progress, until=until)

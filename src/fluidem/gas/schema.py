@@ -45,7 +45,7 @@ from .grid import PERIODIC, SIDES, StaggeredGrid
 from .solver import REFUSED_SOLVERS, GasProperties, GasSolver
 
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", validate_assignment=True)
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, validate_assignment=True)
 
 
 class GridSpec(_Strict):

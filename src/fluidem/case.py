@@ -262,7 +262,43 @@ class Case(Strict):
                                  "plane (z = 0); set gravity = [0.0, -9.81, 0.0]")
             if self.coupling is None:
                 object.__setattr__(self, "coupling", CouplingSection())
+            self._check_gas_covers_particles()
         return self
+
+    def _check_gas_covers_particles(self) -> None:
+        """ValueError where the particles' box or placement region reaches outside the gas grid (x-y, lower-left
+        corner at the origin), or a box's depth (z extent) is not the grid's depth: the gas cells of a 2D grid
+        hold the particles of that depth, so the two must agree."""
+        size, depth = self.gas.grid.size, self.gas.grid.depth
+        tol = 1e-6 * max(size)
+        fix = "make the gas grid cover the particles (or shrink the box)"
+
+        def outside(lo, hi) -> str | None:
+            for d, ax in enumerate("xy"):
+                if lo[d] < -tol or hi[d] > size[d] + tol:
+                    return f"{ax} from {lo[d]:g} to {hi[d]:g} m is not within the gas grid's 0 to {size[d]:g} m"
+            return None
+
+        for i, w in enumerate(self.walls):
+            if w.kind != "box":
+                continue
+            what = outside(w.lower, w.upper)
+            if what:
+                raise ValueError(f"walls.{i} ({w.name!r}) lower = {list(w.lower)}, upper = {list(w.upper)} and "
+                                 f"gas.grid.size = {list(size)}: {what} (the grid's lower-left corner is at the "
+                                 f"origin); particles would leave the gas domain: {fix}")
+            extent = w.upper[2] - w.lower[2]
+            if abs(extent - depth) > 1e-6 * depth:
+                raise ValueError(f"gas.grid.depth = {depth:g} and walls.{i} ({w.name!r}) depth upper z - lower z = "
+                                 f"{w.upper[2]:g} - {w.lower[2]:g} = {extent:g} m differ: the gas cells hold the "
+                                 "particles of the box's depth, so the two must be equal")
+        pl = self.particles.placement
+        if pl.region_lower is not None and pl.region_upper is not None:
+            what = outside(pl.region_lower, pl.region_upper)
+            if what:
+                raise ValueError(f"particles.placement.region_lower = {list(pl.region_lower)}, region_upper = "
+                                 f"{list(pl.region_upper)} and gas.grid.size = {list(size)}: {what}; particles "
+                                 f"would start outside the gas domain: {fix}")
 
     # ---------------------------------------------------------------- I/O
     def to_toml(self) -> str:

@@ -296,7 +296,7 @@ class Case(Strict):
         if pl.region_lower is not None and pl.region_upper is not None:
             what = outside(pl.region_lower, pl.region_upper)
             if what:
-                raise ValueError(f"particles.placement.region_lower = {list(pl.region_lower)}, region_upper = "
+                raise ValueError(f"particles.placement.region_lower = {list(pl.region_lower)}, particles.placement.region_upper = "
                                  f"{list(pl.region_upper)} and gas.grid.size = {list(size)}: {what}; particles "
                                  f"would start outside the gas domain: {fix}")
 

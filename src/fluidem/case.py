@@ -243,22 +243,27 @@ class Case(Strict):
 
     @model_validator(mode="after")
     def _defaults(self):
+        gravity = "gravity"
         if self.gravity is None:
             g = (0.0, -9.81, 0.0) if self.particles.dimensions == 2 else (0.0, 0.0, -9.81)
             object.__setattr__(self, "gravity", g)
+            gravity = f"gravity (not given: the default of particles.dimensions = {self.particles.dimensions})"
         if self.particles.dimensions == 2 and self.gravity[2] != 0.0:
             raise ValueError(f"gravity = {list(self.gravity)}: a 2D case needs gravity in the x-y plane (z = 0)")
         names = [w.name for w in self.walls]
-        if len(set(names)) != len(names):
-            raise ValueError(f"wall names must be unique, got {names}")
+        for j, name in enumerate(names):
+            if name in names[:j]:
+                raise ValueError(f"walls.{j}.name = {name!r}: wall names must be unique "
+                                 f"(walls.{names.index(name)}.name is {name!r} too)")
         for wp in self.particles.wall_pairs:
             if wp.wall is not None and wp.wall not in names:
                 raise ValueError(f"particles.wall_pairs: wall {wp.wall!r} is not one of {names}")
         if self.gas is None and self.coupling is not None:
-            raise ValueError("[coupling] needs a [gas] section")
+            raise ValueError("coupling: the [coupling] section needs a [gas] section; add one, or remove [coupling] "
+                             "for a run without gas")
         if self.gas is not None:
             if self.gravity[2] != 0.0:
-                raise ValueError(f"gravity = {list(self.gravity)}: the 2D gas grid (x-y) needs gravity in the x-y "
+                raise ValueError(f"{gravity} = {list(self.gravity)}: the 2D gas grid (x-y) needs gravity in the x-y "
                                  "plane (z = 0); set gravity = [0.0, -9.81, 0.0]")
             if self.coupling is None:
                 object.__setattr__(self, "coupling", CouplingSection())

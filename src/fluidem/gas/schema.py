@@ -108,12 +108,18 @@ class GasSection(_Strict):
             raise ValueError(REFUSED_SOLVERS[v])
         return v
 
+    @field_validator("boundaries", mode="before")
+    @classmethod
+    def _known_sides(cls, v):
+        """Side names first: an unknown side is reported as such, whatever its value."""
+        unknown = sorted(set(v) - set(SIDES), key=str) if isinstance(v, dict) else []
+        if unknown:
+            raise ValueError(f"unknown side(s) {', '.join(map(repr, unknown))}; allowed: {', '.join(SIDES)}")
+        return v
+
     @field_validator("boundaries")
     @classmethod
     def _sides(cls, v):
-        unknown = sorted(set(v) - set(SIDES))
-        if unknown:
-            raise ValueError(f"unknown side(s) {', '.join(map(repr, unknown))}; allowed: {', '.join(SIDES)}")
         missing = [s for s in SIDES if s not in v]
         if missing:
             raise ValueError(f"missing side(s) {', '.join(missing)}: give a kind for each of {', '.join(SIDES)}")

@@ -100,7 +100,8 @@ class Placement(Strict):
     region_upper: Vec3 | None = Field(None, description="upper corner of the fill region [m]; default: the wall box")
     spacing: float = Field(1.05, ge=1.0, description="lattice pitch in largest diameters [-]")
     perturbation: float = Field(0.02, ge=0.0, lt=0.5, description="lattice random shift, fraction of the diameter [-]")
-    file: str | None = Field(None, description="CSV (x,y,z,diameter[,species][,vx,vy,vz]) or HDF5 with those datasets")
+    file: str | None = Field(None, description="CSV (x,y,z,diameter[,species][,vx,vy,vz]) or HDF5 with those "
+                                                "datasets: finite numbers, as many rows of each species as its count")
     seed: int = Field(12345, description="random seed of placement and size draws")
     velocity: Vec3 = Field((0.0, 0.0, 0.0), description="initial velocity of every particle [m/s]")
 

@@ -44,7 +44,8 @@ def cmd_run(args) -> int:
     from .simulation import Simulation
 
     if args.until is not None and not (math.isfinite(args.until) and args.until > 0):
-        raise CaseError(f"--until {args.until!r}: must be a finite positive number of simulated seconds")
+        raise CaseError(f"--until {args.until!r} (the time.end to reach): must be a finite positive number of "
+                        "simulated seconds")
     if args.threads is not None and args.threads < 1:
         raise CaseError(f"--threads {args.threads}: must be at least 1")
     if args.resume:

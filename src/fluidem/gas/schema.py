@@ -52,8 +52,10 @@ class GridSpec(_Strict):
     """Uniform 2D staggered grid (``StaggeredGrid``)."""
 
     cells: tuple[int, int] = Field(description="number of cells (nx, ny)")
-    size: tuple[float, float] = Field(description="domain width and height (Lx, Ly) [m]; lower-left corner at 0")
-    depth: float = Field(gt=0.0, description="extent along z of the 2D grid [m]")
+    size: tuple[float, float] = Field(description="domain width and height (Lx, Ly) [m]; lower-left corner at 0; "
+                                                  "must cover every box wall and the placement region in x and y")
+    depth: float = Field(gt=0.0, description="extent along z of the 2D grid [m]; equal to the z extent of the "
+                                             "particles' box walls")
 
     @model_validator(mode="after")
     def _check(self):

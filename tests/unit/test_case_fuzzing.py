@@ -17,12 +17,15 @@ import math
 import re
 
 import pytest
-from hypothesis import HealthCheck, assume, given, settings
-from hypothesis import strategies as st
 
-from fluidem.case import Case, builtin_cases, load_case, read_case_data, validate_case
-from fluidem.cli import main
-from fluidem.errors import CaseError
+pytest.importorskip("hypothesis")  # in the ``test`` extra
+
+from hypothesis import HealthCheck, assume, given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+from fluidem.case import Case, builtin_cases, load_case, read_case_data, validate_case  # noqa: E402
+from fluidem.cli import main  # noqa: E402
+from fluidem.errors import CaseError  # noqa: E402
 
 CASES = {name: read_case_data(path) for name, path in sorted(builtin_cases().items())}
 UNKNOWN = "no_such_key"

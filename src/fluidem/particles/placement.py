@@ -204,9 +204,12 @@ def read_particle_file(case, path: Path):
     found = np.bincount(spec, minlength=len(names))
     for k, sp in enumerate(case.particles.species):
         if found[k] != sp.count:
-            how = (f"rows of species {sp.name!r}" if "species" in cols
-                   else "rows (without a species column every row is the first species, "
-                        f"{names[0]!r})" if k == 0 else f"rows of species {sp.name!r} (the file has no species column)")
+            if "species" in cols:
+                how = f"rows of species {sp.name!r}"
+            elif k == 0:
+                how = f"rows (without a species column every row is the first species, {names[0]!r})"
+            else:
+                how = f"rows of species {sp.name!r} (the file has no species column)"
             raise CaseError(f"{where}: {found[k]} {how}, but particles.species.{k}.count = {sp.count}; "
                             "the file and the counts must agree")
     vel = np.zeros((n, 3))

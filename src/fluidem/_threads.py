@@ -10,7 +10,11 @@ particles each, two threads run the 2400-particle tsuji-jet bed 1.15-1.2x faster
 (``_softsphere_kernels.thread_blocks``).
 """
 
+import logging
+
 PARTICLES_PER_THREAD = 1200
+
+log = logging.getLogger(__name__)
 
 
 def prefer_openmp() -> None:
@@ -51,12 +55,16 @@ def launch_pool() -> None:
 
 def set_threads(n: int | None, n_particles: int | None = None) -> int:
     """Use ``n`` compute threads (None: one per PARTICLES_PER_THREAD particles, at least one, at most all
-    cores; all cores when the count is not given); returns the number in use."""
+    cores; all cores when the count is not given); returns the number in use. More threads than cores
+    are not started: the run takes the cores there are and says so in a warning."""
     import numba
 
+    cores = numba.config.NUMBA_NUM_THREADS
     if n is None:
-        n = numba.config.NUMBA_NUM_THREADS
+        n = cores
         if n_particles is not None:
             n = min(n, max(1, int(n_particles) // PARTICLES_PER_THREAD))
-    numba.set_num_threads(max(1, min(int(n), numba.config.NUMBA_NUM_THREADS)))
+    elif int(n) > cores:
+        log.warning("%d threads asked, %d core%s: using %d", int(n), cores, "" if cores == 1 else "s", cores)
+    numba.set_num_threads(max(1, min(int(n), cores)))
     return numba.get_num_threads()

@@ -24,7 +24,7 @@ Vec3 = tuple[float, float, float]
 
 
 class Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", validate_assignment=True)
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, validate_assignment=True)
 
 
 # every registered contact law, chosen by its ``model`` key (the registry is the only list of models)
@@ -57,7 +57,8 @@ class Species(Strict):
     name: str = Field("particles", description="species name (pairs, wall_pairs and the output refer to it)")
     diameter: float = Field(gt=0.0, description="diameter [m] (the mean if a size_distribution is given)")
     density: float = Field(gt=0.0, description="material density [kg/m^3]")
-    count: int = Field(ge=0, description="number of particles")
+    count: int = Field(ge=1, description="number of particles (at least 1; with placement.method = 'file', the "
+                                         "file's rows of this species)")
     size_distribution: SizeDistribution | None = Field(None, description="diameters drawn from a distribution; "
                                                                          "default all equal to diameter")
     youngs_modulus: float | None = Field(None, gt=0.0, description="E [Pa] for Hertz–Mindlin (default: the contact's)")
@@ -99,7 +100,8 @@ class Placement(Strict):
     region_upper: Vec3 | None = Field(None, description="upper corner of the fill region [m]; default: the wall box")
     spacing: float = Field(1.05, ge=1.0, description="lattice pitch in largest diameters [-]")
     perturbation: float = Field(0.02, ge=0.0, lt=0.5, description="lattice random shift, fraction of the diameter [-]")
-    file: str | None = Field(None, description="CSV (x,y,z,diameter[,species][,vx,vy,vz]) or HDF5 with those datasets")
+    file: str | None = Field(None, description="CSV (x,y,z,diameter[,species][,vx,vy,vz]) or HDF5 with those "
+                                                "datasets: finite numbers, as many rows of each species as its count")
     seed: int = Field(12345, description="random seed of placement and size draws")
     velocity: Vec3 = Field((0.0, 0.0, 0.0), description="initial velocity of every particle [m/s]")
 
@@ -242,26 +244,67 @@ class Case(Strict):
 
     @model_validator(mode="after")
     def _defaults(self):
+        gravity = "gravity"
         if self.gravity is None:
             g = (0.0, -9.81, 0.0) if self.particles.dimensions == 2 else (0.0, 0.0, -9.81)
             object.__setattr__(self, "gravity", g)
+            gravity = f"gravity (not given: the default of particles.dimensions = {self.particles.dimensions})"
         if self.particles.dimensions == 2 and self.gravity[2] != 0.0:
             raise ValueError(f"gravity = {list(self.gravity)}: a 2D case needs gravity in the x-y plane (z = 0)")
         names = [w.name for w in self.walls]
-        if len(set(names)) != len(names):
-            raise ValueError(f"wall names must be unique, got {names}")
+        for j, name in enumerate(names):
+            if name in names[:j]:
+                raise ValueError(f"walls.{j}.name = {name!r}: wall names must be unique "
+                                 f"(walls.{names.index(name)}.name is {name!r} too)")
         for wp in self.particles.wall_pairs:
             if wp.wall is not None and wp.wall not in names:
                 raise ValueError(f"particles.wall_pairs: wall {wp.wall!r} is not one of {names}")
         if self.gas is None and self.coupling is not None:
-            raise ValueError("[coupling] needs a [gas] section")
+            raise ValueError("coupling: the [coupling] section needs a [gas] section; add one, or remove [coupling] "
+                             "for a run without gas")
         if self.gas is not None:
             if self.gravity[2] != 0.0:
-                raise ValueError(f"gravity = {list(self.gravity)}: the 2D gas grid (x-y) needs gravity in the x-y "
+                raise ValueError(f"{gravity} = {list(self.gravity)}: the 2D gas grid (x-y) needs gravity in the x-y "
                                  "plane (z = 0); set gravity = [0.0, -9.81, 0.0]")
             if self.coupling is None:
                 object.__setattr__(self, "coupling", CouplingSection())
+            self._check_gas_covers_particles()
         return self
+
+    def _check_gas_covers_particles(self) -> None:
+        """ValueError where the particles' box or placement region reaches outside the gas grid (x-y, lower-left
+        corner at the origin), or a box's depth (z extent) is not the grid's depth: the gas cells of a 2D grid
+        hold the particles of that depth, so the two must agree."""
+        size, depth = self.gas.grid.size, self.gas.grid.depth
+        tol = 1e-6 * max(size)
+        fix = "make the gas grid cover the particles (or shrink the box)"
+
+        def outside(lo, hi) -> str | None:
+            for d, ax in enumerate("xy"):
+                if lo[d] < -tol or hi[d] > size[d] + tol:
+                    return f"{ax} from {lo[d]:g} to {hi[d]:g} m is not within the gas grid's 0 to {size[d]:g} m"
+            return None
+
+        for i, w in enumerate(self.walls):
+            if w.kind != "box":
+                continue
+            what = outside(w.lower, w.upper)
+            if what:
+                raise ValueError(f"walls.{i} ({w.name!r}) lower = {list(w.lower)}, upper = {list(w.upper)} and "
+                                 f"gas.grid.size = {list(size)}: {what} (the grid's lower-left corner is at the "
+                                 f"origin); particles would leave the gas domain: {fix}")
+            extent = w.upper[2] - w.lower[2]
+            if abs(extent - depth) > 1e-6 * depth:
+                raise ValueError(f"gas.grid.depth = {depth:g} and walls.{i} ({w.name!r}) depth upper z - lower z = "
+                                 f"{w.upper[2]:g} - {w.lower[2]:g} = {extent:g} m differ: the gas cells hold the "
+                                 "particles of the box's depth, so the two must be equal")
+        pl = self.particles.placement
+        if pl.region_lower is not None and pl.region_upper is not None:
+            what = outside(pl.region_lower, pl.region_upper)
+            if what:
+                raise ValueError(f"particles.placement.region_lower = {list(pl.region_lower)}, particles.placement.region_upper = "
+                                 f"{list(pl.region_upper)} and gas.grid.size = {list(size)}: {what}; particles "
+                                 f"would start outside the gas domain: {fix}")
 
     # ---------------------------------------------------------------- I/O
     def to_toml(self) -> str:
@@ -394,6 +437,8 @@ def format_validation_error(err: ValidationError) -> str:
             key = str(ctx.get("discriminator", "model")).strip("'")
             _, model = _resolve(loc)
             lines.append(f"{shown}: needs a {key!r} key" + _choices(loc, key))
+        elif e["type"] == "finite_number":
+            lines.append(f"{shown} = {e['input']!r}: must be a finite number (NaN and ±inf are not allowed)")
         else:
             msg = e["msg"].removeprefix("Value error, ")
             value = e.get("input")
@@ -432,8 +477,18 @@ def read_case_data(name_or_path: str | Path) -> dict:
         raise CaseError(
             f"case {str(name_or_path)!r} is neither a TOML file nor a built-in case; built-in: {', '.join(sorted(builtin))}"
         )
+    if path.is_dir():
+        raise CaseError(f"case {str(name_or_path)!r} is a folder; give a TOML case file or a built-in case name")
     try:
-        data = tomllib.loads(path.read_text())
+        text = path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as err:
+        line = path.read_bytes()[:err.start].count(b"\n") + 1
+        raise CaseError(f"case file {path}: not a text (UTF-8) file: byte {err.object[err.start]:#04x} on line {line} "
+                        "cannot be decoded; a case file is TOML text") from None
+    except OSError as err:
+        raise CaseError(f"case file {path}: cannot be read: {err.strerror or err}") from None
+    try:
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise CaseError(f"case file {path}: not valid TOML: {err}") from None
     # a placement file named relative to the case file is found beside it

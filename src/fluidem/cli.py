@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import math
 import sys
 import time
 from pathlib import Path
@@ -40,19 +41,21 @@ def _parse_sets(items: list[str]) -> dict:
 def cmd_run(args) -> int:
     from .case import load_case
     from .io.summary import summary_json
+    from .errors import CaseError
     from .simulation import Simulation
 
+    if args.until is not None and not (math.isfinite(args.until) and args.until > 0):
+        raise CaseError(f"--until {args.until!r} (the time.end to reach): must be a finite positive number of "
+                        "simulated seconds")
+    if args.threads is not None and args.threads < 1:
+        raise CaseError(f"--threads {args.threads}: must be at least 1")
     if args.resume:
         if args.case or args.set:
-            from .errors import CaseError
-
             raise CaseError("--resume DIR continues a run as it was set up; give no CASE or --set with it")
-        sim = Simulation.resume(args.resume, progress=not args.quiet, threads=args.threads)
+        sim = Simulation.resume(args.resume, progress=not args.quiet, threads=args.threads, until=args.until)
         out = Path(args.resume)
     else:
         if not args.case:
-            from .errors import CaseError
-
             raise CaseError("fluidem run needs a CASE (a built-in name, see `fluidem cases`, or a TOML path)")
         overrides = _parse_sets(args.set)
         if args.until is not None:

@@ -92,9 +92,12 @@ class Simulation:
     ``resume=True`` continues from the newest usable checkpoint of ``out_dir``: ``restart.h5``, or
     ``restart.prev.h5`` with a warning when ``restart.h5`` is missing or damaged (``checkpoint_used``
     names the file); ``CheckpointError`` when neither can be used, with nothing in ``out_dir`` changed.
+    ``until`` (default the case's ``time.end``) is then where the resumed run is to go, and a checkpoint
+    already there is refused (CaseError) before any file of the run directory is touched.
     """
 
-    def __init__(self, case: Case, out_dir: str | Path | None = None, resume: bool = False, progress: bool = False):
+    def __init__(self, case: Case, out_dir: str | Path | None = None, resume: bool = False, progress: bool = False,
+                 until: float | None = None):
         self.case = case
         self.out_dir = Path(out_dir) if out_dir is not None else None
         self.threads = _threads.set_threads(case.threads, sum(s.count for s in case.particles.species))
@@ -107,6 +110,7 @@ class Simulation:
             if self.out_dir is None:
                 raise CaseError("resume=True needs the run directory out_dir")
             scalars = self._open_checkpoint()
+            self._check_resume_target(scalars, until)
         else:
             self.engine = engine_for(case)
             self.engine.check_initial_overlaps()
@@ -230,6 +234,16 @@ class Simulation:
         return self.engine.state
 
     # ------------------------------------------------------------ run directory
+    def _check_resume_target(self, scalars: dict, until: float | None) -> None:
+        """CaseError if the checkpoint ``scalars`` are already at or past ``until`` (default ``time.end``):
+        a resume there would take no step."""
+        steps, dt = int(scalars.get("steps", 0)), float(scalars.get("dt", 0.0))
+        target = self.case.time.end if until is None else until
+        if dt > 0 and int(round(target / dt)) <= steps:
+            asked = f"--until {target:g}" if until is not None else f"its time.end = {target:g} s"
+            raise CaseError(f"--resume {self.out_dir}: the run is already at t = {steps * dt:.6g} s >= {asked}; "
+                            f"give a later --until to continue it")
+
     def _prepare_run_directory(self, resume: bool) -> None:
         out = self.out_dir
         if resume:
@@ -311,6 +325,8 @@ class Simulation:
     def run(self, until: float | None = None) -> dict:
         """Advance to simulated time ``until`` (default the case's end), firing observers; returns the summary."""
         until = self.case.time.end if until is None else until
+        if not math.isfinite(until):
+            raise CaseError(f"until = {until!r}: must be a finite number of simulated seconds")
         target = int(round(until / self.dt))
         self._run_wall_start = _time.perf_counter()
         self._run_time_start = self.time
@@ -530,15 +546,17 @@ class Simulation:
             self.energy0 = float(scalars["energy0"])
 
     @classmethod
-    def resume(cls, out_dir: str | Path, progress: bool = False, threads: int | None = None) -> "Simulation":
-        """Continue the run in ``out_dir`` from its last checkpoint (optionally with another thread count)."""
+    def resume(cls, out_dir: str | Path, progress: bool = False, threads: int | None = None,
+               until: float | None = None) -> "Simulation":
+        """Continue the run in ``out_dir`` from its last checkpoint (optionally with another thread count) to
+        ``until`` (default the case's ``time.end``; CaseError if the checkpoint is already there)."""
         out_dir = Path(out_dir)
         if not (out_dir / "case.toml").exists():
             raise CaseError(f"--resume {out_dir}: not a run directory (no case.toml)")
         case = read_run_case(out_dir / "case.toml")
         if threads is not None:
             case.threads = threads
-        return cls(case, out_dir=out_dir, resume=True, progress=progress)
+        return cls(case, out_dir=out_dir, resume=True, progress=progress, until=until)
 
 
 def read_run_case(path: Path) -> Case:

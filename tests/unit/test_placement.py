@@ -231,9 +231,14 @@ def test_file_placement_csv_with_species_names_and_velocities(tmp_path):
     assert spec.tolist() == [0, 0, 0, 1]
 
 
+def one_species(count):
+    """One species of ``count`` particles: the file has no species column, so every row is this species."""
+    return [{"name": "a", "diameter": 0.004, "density": 2500.0, "count": count}]
+
+
 def test_file_placement_csv_minimal_columns(tmp_path):
     path = write_csv(tmp_path / "p.csv", FILE_ROWS, velocity=False)
-    pos, vel, diam, spec = placed(file_case(path))
+    pos, vel, diam, spec = placed(file_case(path, species=one_species(4)))
     assert np.array_equal(pos, FILE_ROWS[:, :3])
     assert np.all(vel == 0) and np.all(spec == 0)
 
@@ -246,7 +251,7 @@ def test_file_placement_csv_species_indices(tmp_path):
 
 def test_file_placement_csv_single_row(tmp_path):
     path = write_csv(tmp_path / "p.csv", FILE_ROWS[:1])
-    pos, _, diam, _ = placed(file_case(path))
+    pos, _, diam, _ = placed(file_case(path, species=one_species(1)))
     assert pos.shape == (1, 3) and np.array_equal(pos[0], FILE_ROWS[0, :3])
 
 
@@ -270,7 +275,7 @@ def test_file_placement_hdf5_xyz_datasets(tmp_path):
         for k, name in enumerate("xyz"):
             f[name] = FILE_ROWS[:, k]
         f["diameter"] = FILE_ROWS[:, 3]
-    pos, vel, diam, spec = placed(file_case(path))
+    pos, vel, diam, spec = placed(file_case(path, species=one_species(4)))
     assert np.array_equal(pos, FILE_ROWS[:, :3])
     assert np.all(vel == 0) and np.all(spec == 0)
 
@@ -342,7 +347,7 @@ def test_particle_crossing_a_wall(tmp_path, dimensions, where, wall):
 def test_particle_crossing_a_plane_wall(tmp_path):
     rows = np.array([[0.02, 0.02, 0.002, 0.004], [0.03, 0.0105, 0.002, 0.004]])
     case = make_case(placement={"method": "file", "file": str(write_csv(tmp_path / "p.csv", rows, velocity=False))},
-                     walls=[{"name": "floor", "kind": "plane", "point": [0.0, 0.011, 0.0], "normal": [0.0, 1.0, 0.0]}])
+                     species=one_species(2), walls=[{"name": "floor", "kind": "plane", "point": [0.0, 0.011, 0.0], "normal": [0.0, 1.0, 0.0]}])
     with pytest.raises(CaseError) as info:
         simulation(case)
     assert "floor" in str(info.value) and "particle 1" in str(info.value)

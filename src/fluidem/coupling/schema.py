@@ -70,7 +70,7 @@ DragLawChoice = Annotated[Union[tuple(drag_laws.get(n) for n in drag_laws.names(
 class CouplingSection(BaseModel):
     """Gas–particle momentum exchange of a coupled run (used only with a ``[gas]`` section)."""
 
-    model_config = ConfigDict(extra="forbid", validate_assignment=True)
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, validate_assignment=True)
 
     drag: DragLawChoice = Field(default_factory=lambda: drag_laws.get("hoomans1996")(),
                                 description="drag law: a table with its model name and parameters, or the name")

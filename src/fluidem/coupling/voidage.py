@@ -183,7 +183,7 @@ class VoidageMapping(BaseModel):
     minimum_voidage : overfull cells are clipped to this ε [-]
     """
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
 
     method: Literal["centroid", "area", "area_volume"] = Field(
         "centroid", description="solids fraction of a cell: particle volumes by centre (Sun 2007 eq. 34), exact "

@@ -45,15 +45,17 @@ from .grid import PERIODIC, SIDES, StaggeredGrid
 from .solver import REFUSED_SOLVERS, GasProperties, GasSolver
 
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", validate_assignment=True)
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, validate_assignment=True)
 
 
 class GridSpec(_Strict):
     """Uniform 2D staggered grid (``StaggeredGrid``)."""
 
     cells: tuple[int, int] = Field(description="number of cells (nx, ny)")
-    size: tuple[float, float] = Field(description="domain width and height (Lx, Ly) [m]; lower-left corner at 0")
-    depth: float = Field(gt=0.0, description="extent along z of the 2D grid [m]")
+    size: tuple[float, float] = Field(description="domain width and height (Lx, Ly) [m]; lower-left corner at 0; "
+                                                  "must cover every box wall and the placement region in x and y")
+    depth: float = Field(gt=0.0, description="extent along z of the 2D grid [m]; equal to the z extent of the "
+                                             "particles' box walls")
 
     @model_validator(mode="after")
     def _check(self):
@@ -108,12 +110,18 @@ class GasSection(_Strict):
             raise ValueError(REFUSED_SOLVERS[v])
         return v
 
+    @field_validator("boundaries", mode="before")
+    @classmethod
+    def _known_sides(cls, v):
+        """Side names first: an unknown side is reported as such, whatever its value."""
+        unknown = sorted(set(v) - set(SIDES), key=str) if isinstance(v, dict) else []
+        if unknown:
+            raise ValueError(f"unknown side(s) {', '.join(map(repr, unknown))}; allowed: {', '.join(SIDES)}")
+        return v
+
     @field_validator("boundaries")
     @classmethod
     def _sides(cls, v):
-        unknown = sorted(set(v) - set(SIDES))
-        if unknown:
-            raise ValueError(f"unknown side(s) {', '.join(map(repr, unknown))}; allowed: {', '.join(SIDES)}")
         missing = [s for s in SIDES if s not in v]
         if missing:
             raise ValueError(f"missing side(s) {', '.join(missing)}: give a kind for each of {', '.join(SIDES)}")

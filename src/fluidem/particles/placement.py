@@ -7,6 +7,7 @@ are errors that name the particles.
 """
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -119,50 +120,108 @@ def _filled_fraction(diam, lo, hi, dim2):
 
 
 def read_particle_file(case, path: Path):
-    """Particles from CSV (header x,y,z,diameter[,species][,vx,vy,vz]) or HDF5 datasets of the same names."""
+    """Particles from CSV (header x,y,z,diameter[,species][,vx,vy,vz]) or HDF5 datasets of the same names.
+
+    Every number must be finite and each species must have as many rows as its ``count`` (all rows are
+    the first species where the file has no species column); otherwise CaseError names the file, the
+    row and the column."""
+    where = f"particles.placement.file = {str(path)!r}"
     if not path.exists():
-        raise CaseError(f"particles.placement.file = {str(path)!r}: no such file")
+        raise CaseError(f"{where}: no such file")
+    if path.is_dir():
+        raise CaseError(f"{where}: is a folder, not a CSV or HDF5 file")
     names = [s.name for s in case.particles.species]
-    if path.suffix in (".h5", ".hdf5"):
+    csv = path.suffix not in (".h5", ".hdf5")
+    if not csv:
         import h5py
 
-        with h5py.File(path, "r") as f:
-            cols = {k: np.asarray(f[k]) for k in f.keys() if isinstance(f[k], h5py.Dataset)}
+        try:
+            with h5py.File(path, "r") as f:
+                cols = {k: np.asarray(f[k]) for k in f.keys() if isinstance(f[k], h5py.Dataset)}
+        except OSError as err:
+            raise CaseError(f"{where}: cannot read HDF5: {err}") from None
         if "position" in cols:
             p = cols.pop("position")
+            if p.ndim != 2 or p.shape[1] != 3:
+                raise CaseError(f"{where}: dataset 'position' has shape {p.shape}; need (N, 3)")
             cols.update(x=p[:, 0], y=p[:, 1], z=p[:, 2])
     else:
         try:
             arr = np.genfromtxt(path, delimiter=",", names=True, dtype=None, encoding="utf-8")
         except Exception as err:  # noqa: BLE001 - report any parse failure as bad input
-            raise CaseError(f"particles.placement.file = {str(path)!r}: cannot read CSV: {err}") from None
+            raise CaseError(f"{where}: cannot read CSV: {err}") from None
+        if arr.dtype.names is None:
+            raise CaseError(f"{where}: cannot read CSV: no header line x,y,z,diameter[,species][,vx,vy,vz]")
         arr = np.atleast_1d(arr)
         cols = {k: arr[k] for k in arr.dtype.names}
+
+    def row(k: int) -> str:  # a data row by its particle index, with its line in a CSV (after the header)
+        return f"row {k} (line {k + 2})" if csv else f"row {k}"
+
     for key in ("x", "y", "z", "diameter"):
         if key not in cols:
-            raise CaseError(f"particles.placement.file = {str(path)!r}: column {key!r} missing (need x, y, z, diameter)")
-    n = len(cols["x"])
-    pos = np.column_stack([np.asarray(cols[k], float) for k in "xyz"])
-    diam = np.asarray(cols["diameter"], float)
+            raise CaseError(f"{where}: column {key!r} missing (need x, y, z, diameter)")
+    n = len(np.atleast_1d(cols["x"]))
+    if n == 0:
+        raise CaseError(f"{where}: no particle rows (a header only)")
+
+    def numbers(key: str) -> np.ndarray:
+        raw = np.atleast_1d(np.asarray(cols[key]))
+        if raw.shape != (n,):
+            raise CaseError(f"{where}: column {key!r} has {raw.size} values, column 'x' {n}")
+        if raw.dtype.kind not in "iuf":
+            bad = next((k for k, v in enumerate(raw) if not _is_number(v)), 0)
+            raise CaseError(f"{where}: column {key!r}, {row(bad)}: {str(raw[bad])!r} is not a number")
+        out = raw.astype(float)
+        notfinite = np.flatnonzero(~np.isfinite(out))
+        if notfinite.size:
+            bad = int(notfinite[0])
+            more = f" (and {notfinite.size - 1} more rows)" if notfinite.size > 1 else ""
+            note = " (an empty cell reads as nan)" if csv and math.isnan(out[bad]) else ""
+            raise CaseError(f"{where}: column {key!r}, {row(bad)}: {float(out[bad])!r}{note}{more}; "
+                            "every value must be a finite number")
+        return out
+
+    pos = np.column_stack([numbers(k) for k in "xyz"])
+    diam = numbers("diameter")
     if np.any(~(diam > 0)):
         bad = int(np.flatnonzero(~(diam > 0))[0])
-        raise CaseError(f"particles.placement.file: diameter of row {bad} is {diam[bad]}; must be > 0")
+        raise CaseError(f"{where}: column 'diameter', {row(bad)}: {diam[bad]}; must be > 0")
     if "species" in cols:
-        raw = cols["species"]
+        raw = np.atleast_1d(np.asarray(cols["species"]))
         if raw.dtype.kind in "iu":
             spec = np.asarray(raw, np.int64)
         else:
             lookup = {nm: k for k, nm in enumerate(names)}
             try:
-                spec = np.array([lookup[str(s)] for s in raw], np.int64)
+                spec = np.array([lookup[s.decode() if isinstance(s, bytes) else str(s)] for s in raw], np.int64)
             except KeyError as err:
-                raise CaseError(f"particles.placement.file: species {err.args[0]!r} is not one of {names}") from None
-        if spec.min() < 0 or spec.max() >= len(names):
-            raise CaseError(f"particles.placement.file: species index outside 0..{len(names) - 1}")
+                raise CaseError(f"{where}: species {err.args[0]!r} is not one of {names}") from None
+        if spec.size and (spec.min() < 0 or spec.max() >= len(names)):
+            raise CaseError(f"{where}: species index outside 0..{len(names) - 1}")
     else:
         spec = np.zeros(n, np.int64)
+    found = np.bincount(spec, minlength=len(names))
+    for k, sp in enumerate(case.particles.species):
+        if found[k] != sp.count:
+            if "species" in cols:
+                how = f"rows of species {sp.name!r}"
+            elif k == 0:
+                how = f"rows (without a species column every row is the first species, {names[0]!r})"
+            else:
+                how = f"rows of species {sp.name!r} (the file has no species column)"
+            raise CaseError(f"{where}: {found[k]} {how}, but particles.species.{k}.count = {sp.count}; "
+                            "the file and the counts must agree")
     vel = np.zeros((n, 3))
     for d, k in enumerate(("vx", "vy", "vz")):
         if k in cols:
-            vel[:, d] = np.asarray(cols[k], float)
+            vel[:, d] = numbers(k)
     return pos, vel, diam, spec
+
+
+def _is_number(value) -> bool:
+    try:
+        float(value)
+    except (TypeError, ValueError):
+        return False
+    return True

@@ -38,7 +38,7 @@ class DragLaw(BaseModel):
     order they are declared, and the law's ``beta_per_solids(p, ...)`` kernel reads them from ``p[1:]``.
     """
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
 
     code: ClassVar[int] = 0
     stokes_limit: ClassVar[bool] = True  # β V_p/(1-ε) -> 3π μ d as ε -> 1, Re -> 0

@@ -63,7 +63,7 @@ class Model(BaseModel):
     """A building block of the gas section: unknown keys are errors, and one built in Python with a bad value
     raises ``CaseError`` (the case loader reports the same problems with their dotted key)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True, arbitrary_types_allowed=True)
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True, arbitrary_types_allowed=True)
 
     def __init__(self, /, **data: Any):
         try:
@@ -98,7 +98,7 @@ class Pulse(Model):
 
     pulse: float = Field(description="value during the pulse (a velocity [m/s] or a pressure [Pa])")
     start: float = Field(0.0, description="start of the pulse [s]")
-    duration: float = Field(math.inf, description="duration of the pulse [s]")
+    duration: float = Field(math.inf, allow_inf_nan=True, description="duration of the pulse [s] (inf: for ever)")
     otherwise: float = Field(0.0, description="value outside the pulse (the unit of pulse)")
 
     def __init__(self, pulse: float | None = None, /, **data: Any):

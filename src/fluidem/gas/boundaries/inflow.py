@@ -119,7 +119,7 @@ class Inflow(BoundaryCondition):
     @classmethod
     def _voidage(cls, v):
         v = check_number(v, positive=True)
-        if callable(v) or v > 1.0:
+        if callable(v) or isinstance(v, dict) or v > 1.0:
             raise ValueError("must be a number in (0, 1]")
         return v
 

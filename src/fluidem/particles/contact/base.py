@@ -35,7 +35,7 @@ contact_models: Registry[type["ContactModel"]] = Registry("contact model")
 class ContactModel(BaseModel):
     """Parameters shared by every contact law: restitution and Coulomb friction."""
 
-    model_config = ConfigDict(extra="forbid", validate_assignment=True)
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, validate_assignment=True)
 
     restitution: float = Field(0.9, gt=0.0, le=1.0, description="normal restitution coefficient e_n [-]")
     friction: float = Field(0.3, ge=0.0, description="Coulomb friction coefficient mu [-]")
@@ -60,7 +60,7 @@ class ContactModel(BaseModel):
 class Material(BaseModel):
     """Elastic constants of a body, needed by Hertz–Mindlin; ignored by linear springs."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
     youngs_modulus: float | None = None
     poisson_ratio: float | None = None

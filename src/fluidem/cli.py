@@ -87,9 +87,14 @@ def cmd_run(args) -> int:
 
 def cmd_cases(args) -> int:
     from .case import builtin_cases, load_case
+    from .estimate import human, wall_time_estimate
 
     for name, path in sorted(builtin_cases().items()):
-        print(f"{name:20s} {load_case(path).description}")
+        case = load_case(path)
+        n = sum(s.count for s in case.particles.species)
+        print(f"{name:24s} {case.description}")
+        print(f"{'':24s} {n} particles, {case.time.end:g} s simulated, {human(wall_time_estimate(case))} on one core "
+              f"(rough)")
     return 0
 
 
@@ -142,7 +147,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="continue a stopped run from DIR/restart.h5 (DIR/restart.prev.h5 where that is damaged)")
     r.set_defaults(func=cmd_run)
 
-    c = sub.add_parser("cases", help="list built-in cases")
+    c = sub.add_parser("cases", help="list built-in cases: what each is, its particles, simulated length and a "
+                                     "rough wall time")
     c.set_defaults(func=cmd_cases)
 
     b = sub.add_parser("bench", help="throughput on standard problems (particle-steps per second)")
@@ -207,6 +213,11 @@ def main(argv: list[str] | None = None) -> int:
         except CaseError as err:
             log.error("%s", err)
             return EXIT_BAD_INPUT
+        except BrokenPipeError:  # the reader of stdout went away (``fluidem cases | head``): stop quietly
+            import os
+
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            return 0
 
 
 if __name__ == "__main__":

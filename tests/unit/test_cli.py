@@ -545,3 +545,18 @@ def test_write_failure_keeps_the_checkpoint_resumable(tmp_path, capsys, monkeypa
             return [float(f["snapshots"][k].attrs["time"]) for k in sorted(f["snapshots"])]
 
     assert times(out_dir) == times(ref)
+
+
+def test_cases_shows_each_case_size_length_and_a_rough_wall_time(capsys):
+    from fluidem.estimate import _dt, wall_time_estimate
+    from fluidem.particles import engine_for
+
+    rc, out, err = cli(["cases"], capsys)
+    assert rc == 0
+    lines = out.splitlines()
+    below_pour = lines[[k for k, line in enumerate(lines) if line.startswith("pour ")][0] + 1]
+    assert below_pour.split()[:5] == ["500", "particles,", "1.5", "s", "simulated,"] and "on one core" in below_pour
+    # the estimate's time step is the one the engine takes (the contact time of the smallest pair)
+    case = load_case("pour")
+    assert _dt(case) == pytest.approx(engine_for(case).dt, rel=1e-12)
+    assert 1.0 < wall_time_estimate(case) < 60.0  # 500 particles × 1e5 steps at millions of particle-steps/s

@@ -14,9 +14,10 @@ itself, and no energy error in flight.
 A bounce inside a step is straight flight at the step's velocity, so each bounce of an elastic
 sphere on a floor changes the energy: by −(1 + e) m |g| y_mid (derived in the test) with y_mid the
 height above contact at mid-step on the straight path, |y_mid| ≤ |v| DT/2. Under the split step
-the steps are time-reversible: the bounce after the next one meets the floor at the mirror phase
-and gives the change back, so the energy takes two values forever. Under Hoomans' step it does
-not, and the energy at the top of each flight drifts.
+the steps are time-reversible: the next bounce meets the floor at the mirror phase and gives the
+change back, so the energy takes two values forever, without drift. Hoomans' step is the split step
+seen half a kick later (``test_hardsphere_dynamics``): it does not drift either, and adds the
+first-order offset ½ m g·DT (v_0 − v) of its half-step-apart positions and velocities.
 """
 from __future__ import annotations
 

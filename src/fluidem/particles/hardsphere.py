@@ -77,6 +77,7 @@ class HardSphereEngine(ParticleEngine):
     Attributes besides the soft-sphere interface (``case, dim2, walls, state, inv_mass,
     gravity, ext_force, wall_point0, wall_normal, wall_motion, dt, time, steps, rebuilds``):
 
+    force_step : str, "split" or "hoomans" (``particles.force_step``; see the module docstring)
     collisions, wall_collisions : int, cumulative collision counts (wall ones included in the first)
     sticking_collisions : int, collisions of the sticking class (eq. 25)
     dissipated_normal_J, dissipated_tangential_J : float, sums of eq. 23 and of eqs 27/29 [J]
@@ -259,8 +260,8 @@ class HardSphereEngine(ParticleEngine):
         Their sum is Hoomans' E_tot (1996 eq. 51), constant when no gas acts up to the error of the force
         step: in free flight none with ``force_step = "split"`` and ½ m g·DT (v − v_0) with ``"hoomans"``;
         each wall collision −(1 + e) m g·n y_mid with y_mid the mid-step gap on the straight path (the wall's
-        impulse does work in a step that does not bend under gravity; at a bed's floor, ½ M g² DT per unit
-        time, first order in DT for both steps).
+        impulse does work in a step that does not bend under gravity; at the floor of a bed at rest, at most
+        ½ M g² DT per unit time, first order in DT for both steps).
         """
         e = super().energies()
         diss = self.dissipated_normal_J + self.dissipated_tangential_J

@@ -15,7 +15,7 @@ leave the results bitwise the same must print ``same state: True``.
 
 Problems: ``bed10k`` the 10,000-sphere bench bed of ``fluidem bench`` (``--per`` DEM steps a burst,
 default 200; measured: particle-steps per second); ``coupled`` a coupled run resumed from the
-checkpoint of ``--from`` (a run directory, e.g. ``fluidem run tsuji-jet --out runs/tj20``; copied, not
+checkpoint of ``--from`` (a run directory, e.g. ``fluidem run tsuji-jet-background --out runs/tj20``; copied, not
 changed), ``--per`` gas steps a burst (default 50; measured: milliseconds per gas step).
 
 Printed: min, median and max over the rounds of each version, and the working tree's speed-up over

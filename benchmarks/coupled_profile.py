@@ -1,6 +1,6 @@
 """Where the wall time of a coupled gas step goes: DEM, gas solve, map, cell β, deposit, forces.
 
-    fluidem run tsuji-jet --out runs/tj20                    # a developed bed (20 s) to start from
+    fluidem run tsuji-jet-background --out runs/tj20                    # a developed bed (20 s) to start from
     NUMBA_NUM_THREADS=2 python benchmarks/coupled_profile.py --from runs/tj20/restart.h5 --until 0.2 --repeat 3
     python benchmarks/coupled_profile.py --case hoomans-orifice --until 0.01 --repeat 1 [--set key=value ...]
 
@@ -77,7 +77,7 @@ def profile(case, until: float, start: Path | None = None) -> dict:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--case", default="tsuji-jet", help="built-in case name or case file")
+    ap.add_argument("--case", default="tsuji-jet-background", help="built-in case name or case file")
     ap.add_argument("--until", type=float, default=0.2, help="simulated seconds timed in each round [s]")
     ap.add_argument("--set", action="append", metavar="KEY=VALUE", help="case override (as `fluidem run --set`)")
     ap.add_argument("--from", dest="start", type=Path, help="checkpoint (restart.h5) of the same case to start from")

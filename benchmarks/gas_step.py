@@ -1,6 +1,6 @@
 """Milliseconds per gas step (``GasSolver.advance`` alone) on the standard grids, linear solvers side by side.
 
-    python benchmarks/gas_step.py                                   # 15x25, 15x45 (tsuji-jet), 39x60, 150x300
+    python benchmarks/gas_step.py                                   # 15x25, 15x45 (tsuji-jet-background), 39x60, 150x300
     python benchmarks/gas_step.py --grids 15x45 --repeat 5 --seconds 2
     python benchmarks/gas_step.py --grids 39x60,75x150,150x300 --linear-solver band,multigrid,superlu --repeat 3
     python benchmarks/gas_step.py --grids 15x25 --seconds 0.2 --repeat 1       # a quick check
@@ -10,7 +10,7 @@ Problems:
 * ``NXxNY``: the Hoomans 1996 orifice bed of ``fluidem.bench.gas_bench_problem`` (0.15 m x 0.5 m, ideal
   gas, 45 m/s jet, bed of voidage 0.4 in the lower 0.2 m, Ergun's β recomputed from the gas every step,
   moving voidage: a surface wave and a rising bubble), dt = min(1e-4, 0.5 min(dx, dy) / 45 m/s).
-* ``15x45``: the built-in coupled case ``tsuji-jet`` (``load_case("tsuji-jet").gas.build(...)``: 0.15 m x
+* ``15x45``: the built-in coupled case ``tsuji-jet-background`` (``load_case("tsuji-jet-background").gas.build(...)``: 0.15 m x
   0.9 m, 39 m/s jet, ideal gas, dt = 1e-4 s) with a bubbling-bed voidage (bed to 0.22 m, a surface wave
   and a rising bubble) and Gidaspow's β from the gas every step, with a solids velocity field, as the
   coupling hands them over.
@@ -37,10 +37,10 @@ import harness  # benchmarks/harness.py: this script's folder is first on sys.pa
 
 
 def tsuji_problem(linear_solver: str = "auto"):
-    """The tsuji-jet case's gas solver with a bubbling-bed voidage; (solver, state, step_args, dt)."""
+    """The tsuji-jet-background case's gas solver with a bubbling-bed voidage; (solver, state, step_args, dt)."""
     from fluidem.case import load_case
 
-    case = load_case("tsuji-jet")
+    case = load_case("tsuji-jet-background")
     case.gas.linear_solver = linear_solver
     solver = case.gas.build(case.gravity)
     grid = solver.grid
@@ -145,7 +145,7 @@ def main(argv=None) -> int:
                                 "it/step", "fact/step", "steps"], rows))
     for line in ratio_lines:
         print(line)
-    print("* tsuji-jet (built-in case), bubbling-bed voidage and beta; cpu, it/step, fact/step: medians of the rounds")
+    print("* tsuji-jet-background (built-in case), bubbling-bed voidage and beta; cpu, it/step, fact/step: medians of the rounds")
     harness.write_json(a.json, measurements, seconds=a.seconds, linear_solvers=solvers)
     return 0
 

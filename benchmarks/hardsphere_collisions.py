@@ -40,6 +40,7 @@ def bed_case(n=2400, width=0.15, height=0.5, e=0.9, mu=0.3, collapse_time=1e-5, 
         "name": "hs-bench", "gravity": [0.0, -9.81, 0.0],
         "particles": {
             "dimensions": 2,
+            "force_step": "hoomans",  # the step these figures were measured with (the same trajectories as "split")
             "species": [{"name": "aluminium", "diameter": 4e-3, "density": 2700.0, "count": n}],
             "contact": {"model": "hard_sphere", "restitution": e, "friction": mu, "collapse_time": collapse_time},
             "placement": {"method": "random", "seed": seed},

@@ -1,7 +1,7 @@
 """Thread counts against each other on the same problem, in one process, in alternating bursts.
 
     NUMBA_NUM_THREADS=2 python benchmarks/threads_ab.py --problem bed --n 100000 --repeat 10 [--per 20]
-    fluidem run tsuji-jet --out runs/tj20                      # a developed bed to start from
+    fluidem run tsuji-jet-background --out runs/tj20                      # a developed bed to start from
     NUMBA_NUM_THREADS=2 python benchmarks/threads_ab.py --problem coupled --from runs/tj20 --repeat 20 [--per 50]
     NUMBA_NUM_THREADS=2 python benchmarks/threads_ab.py --problem bed --n 10000 --repeat 1 --per 2   # a quick check
 

@@ -1,12 +1,12 @@
-"""The whole 20 s tsuji-jet run against the clock, with LAMMPS timed around it as the machine's yardstick.
+"""The whole 20 s tsuji-jet-background run against the clock, with LAMMPS timed around it as the machine's yardstick.
 
     python benchmarks/tsuji_wall.py --out runs/tsuji_wall [--until 20] [--segments 4] [--repeat 3] [--json out.json]
     python benchmarks/tsuji_wall.py --out /tmp/tw --until 0.01 --segments 2 --lammps-steps 100   # a quick check
 
-The target is wall time: 20 simulated seconds of ``tsuji-jet`` in at most 3 minutes on 2 cores. The
+The target is wall time: 20 simulated seconds of ``tsuji-jet-background`` in at most 3 minutes on 2 cores. The
 shared machine's speed moves by up to 2x within the hour, so one wall time says as much about the
 machine as about fluidem. Each round is one whole run, in ``--segments`` pieces (``fluidem run
-tsuji-jet --until t1``, then ``--resume`` to t2, ...; a resumed run is the same run bit for bit) in
+tsuji-jet-background --until t1``, then ``--resume`` to t2, ...; a resumed run is the same run bit for bit) in
 ``OUT/round-K``; before each piece and after the last, LAMMPS steps the 10,000-sphere bench bed of
 shared/PEERS.md on one core (``--lammps-steps``, ``benchmarks/peers/run_peers.py``). Each piece's
 stepping time (the growth of ``wall_time_s`` in ``summary.json``: stepping and output, no start-up or
@@ -17,7 +17,7 @@ machine's speed. Without LAMMPS the runs are timed all the same, unscaled. A sho
 
 Printed: each piece, then over the rounds the wall time, the scaled wall time, particle-steps per
 second and the LAMMPS rates (min, median, max). The run directories stay (their probes, fields and
-summaries are those of a plain ``fluidem run tsuji-jet``).
+summaries are those of a plain ``fluidem run tsuji-jet-background``).
 """
 from __future__ import annotations
 
@@ -44,14 +44,14 @@ def wall_so_far(out: Path) -> float:
 
 
 def whole_run(out: Path, until: float, segments: int, threads: int, lammps) -> dict:
-    """One run of tsuji-jet to ``until`` in ``segments`` pieces; ``lammps()`` gives the yardstick rate or None."""
+    """One run of tsuji-jet-background to ``until`` in ``segments`` pieces; ``lammps()`` gives the yardstick rate or None."""
     env = dict(os.environ, NUMBA_NUM_THREADS=str(threads))
     rates = [lammps()]
     pieces, before = [], 0.0
     for k in range(segments):
         t_end = until * (k + 1) / segments
         cmd = [sys.executable, "-m", "fluidem", "run", "--until", f"{t_end:.10g}", "--quiet", "--threads", str(threads)]
-        cmd += ["--resume", str(out)] if k else ["tsuji-jet", "--out", str(out)]
+        cmd += ["--resume", str(out)] if k else ["tsuji-jet-background", "--out", str(out)]
         subprocess.run(cmd, check=True, env=env, stdout=subprocess.DEVNULL)  # its summary.json is read below
         now = wall_so_far(out)
         rates.append(lammps())
@@ -99,32 +99,32 @@ def main(argv=None) -> int:
         return float(row["particle_steps_per_s"])
 
     with tempfile.TemporaryDirectory() as tmp:  # compile or load the kernels' caches, untimed
-        subprocess.run([sys.executable, "-m", "fluidem", "run", "tsuji-jet", "--until", "4e-4", "--quiet", "--threads",
+        subprocess.run([sys.executable, "-m", "fluidem", "run", "tsuji-jet-background", "--until", "4e-4", "--quiet", "--threads",
                         str(a.threads), "--out", str(Path(tmp) / "warm-up")], check=True, stdout=subprocess.DEVNULL,
                        env=dict(os.environ, NUMBA_NUM_THREADS=str(a.threads)))
     counter = iter(range(1, a.repeat + 1))
 
     def run_once() -> dict:
         k = next(counter)
-        print(f"round {k}: tsuji-jet to {a.until:g} s on {a.threads} threads in {a.segments} pieces", flush=True)
+        print(f"round {k}: tsuji-jet-background to {a.until:g} s on {a.threads} threads in {a.segments} pieces", flush=True)
         return whole_run(Path(a.out) / f"round-{k}", a.until, a.segments, a.threads, lammps)
 
-    rounds = harness.run_rounds({"tsuji-jet": run_once}, a.repeat, unit="s")
+    rounds = harness.run_rounds({"tsuji-jet-background": run_once}, a.repeat, unit="s")
     rows = [["wall [s]", *_stats(rounds, None)],
             ["at PEERS.md's machine speed [s]", *_stats(rounds, "scaled_wall_s")],
             ["particle-steps/s (gas included)", *_stats(rounds, "particle_steps_per_s")],
             ["LAMMPS one core, slowest [particle-steps/s]", *_stats(rounds, "lammps_min")],
             ["LAMMPS one core, fastest [particle-steps/s]", *_stats(rounds, "lammps_max")]]
-    print(f"\ntsuji-jet {a.until:g} s on {a.threads} threads, {a.repeat} run(s); PEERS.md's LAMMPS one core: "
+    print(f"\ntsuji-jet-background {a.until:g} s on {a.threads} threads, {a.repeat} run(s); PEERS.md's LAMMPS one core: "
           f"{LAMMPS_ANCHOR_1CORE:.3g} particle-steps/s; target 180 s")
     print(harness.format_table(["", "runs", "min", "median", "max"], rows))
-    harness.write_json(a.json, {"tsuji-jet": rounds}, until_s=a.until, segments=a.segments, threads=a.threads,
+    harness.write_json(a.json, {"tsuji-jet-background": rounds}, until_s=a.until, segments=a.segments, threads=a.threads,
                        lammps_anchor=LAMMPS_ANCHOR_1CORE, lammps_error=lammps_error[0] if lammps_error else None)
     return 0
 
 
 def _stats(rounds, key):
-    s = rounds.stats("tsuji-jet", key)
+    s = rounds.stats("tsuji-jet-background", key)
     return [s["n"], s["min"], s["median"], s["max"]]
 
 

@@ -1,13 +1,13 @@
 """Means of coupled runs' probes over windows of simulated time, to compare runs (e.g. two gas steps).
 
-    fluidem run tsuji-jet --out runs/tj20 && fluidem run tsuji-jet --set gas.dt=1e-4 --out runs/tj20-dt1e-4
+    fluidem run tsuji-jet-background --out runs/tj20 && fluidem run tsuji-jet-background --set gas.dt=1e-4 --out runs/tj20-dt1e-4
     python benchmarks/window_stats.py runs/tj20-dt1e-4 runs/tj20 [--windows 5-10,10-15,15-20] [--json out.json]
 
 For each run directory and window: the means of the mean particle height, the coordination number,
 the multicontact ratio, the pressure drop 20 cm above the inlet (and its standard deviation) and over
 the bed, and the shares of the 20 cm pressure drop's periodogram below 4 Hz and within 4–10 Hz. A
 chaotic bed's runs differ in every number; the spread over one run's windows says by how much. This
-backs the case's gas step (``src/fluidem/cases/tsuji-jet.toml``). It reads finished runs and times
+backs the case's gas step (``src/fluidem/cases/tsuji-jet-background.toml``). It reads finished runs and times
 nothing, so it has no ``--repeat``; ``--json`` writes the rows with the machine and git revision as
 the timing scripts do (``harness.write_json``).
 """

@@ -5,7 +5,7 @@ thread's share must be worth waking it for: a soft-sphere step of a few hundred 
 tens of microseconds, about what a parallel region costs, and on a machine whose other cores are
 busy every parallel region waits for a descheduled thread (measured here: 2 threads ran the
 500-particle pour 50x slower than 1 while another process held the second core). With 1200
-particles each, two threads run the 2400-particle tsuji-jet bed 1.15-1.2x faster than one
+particles each, two threads run the 2400-particle tsuji-jet-background bed 1.15-1.2x faster than one
 (``benchmarks/threads_ab.py --problem coupled``; the DEM alone 1.2-1.4x), as each keeps its own block of particles
 (``_softsphere_kernels.thread_blocks``).
 """

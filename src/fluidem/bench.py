@@ -8,7 +8,7 @@ dense bed   The peer benchmark of shared/PEERS.md: monodisperse spheres d = 4 mm
             closed box, loaded settled and at rest. The settled beds are made once by
             this engine (lattice → settle → quench) and cached.
 pour        The built-in 2D ``pour`` case (500 particles), stepping from its start.
-coupled     The built-in ``tsuji-jet`` case (Sun 2007: 2400 soft spheres, 15 × 45 gas cells,
+coupled     The built-in ``tsuji-jet-background`` case (Sun 2007: 2400 soft spheres, 15 × 45 gas cells,
             DT = 2e-4 s, 14 DEM sub-steps) including the gas, from its start for ``coupled_until``
             simulated seconds after a short warm-up that compiles: particle-steps per second,
             ms per gas step split into DEM, gas solve, map, deposit, forces and the rest (of the
@@ -209,7 +209,7 @@ def profile_coupled(sim, until: float) -> dict:
     return row
 
 
-def time_coupled(case_name: str = "tsuji-jet", until: float = 0.25, warmup: float = 0.01,
+def time_coupled(case_name: str = "tsuji-jet-background", until: float = 0.25, warmup: float = 0.01,
                  threads: int | None = None) -> dict:
     """Coupled throughput of a built-in case from its start (see the module docstring)."""
     from .case import load_case
@@ -398,7 +398,7 @@ def run_bench(sizes="10000,100000", threads="1,2", steps: int = 0, as_json: str 
         print(f"\n{'coupled (gas included)':28s} {'N':>6s} {'threads':>7s} {'sim s':>6s} {'wall s':>7s} "
               f"{'particle-steps/s':>17s} {'ms/gas step':>11s} {'20 s takes':>10s}")
         for t in threads:
-            r = time_coupled("tsuji-jet", until=coupled_until, threads=t)
+            r = time_coupled("tsuji-jet-background", until=coupled_until, threads=t)
             rows.append(r)
             print(f"{r['problem']:28s} {r['n_particles']:6d} {r['threads']:7d} {r['sim_seconds']:6.2f} "
                   f"{r['wall_s']:7.2f} {r['particle_steps_per_s']:17.3e} {r['ms_per_gas_step']:11.3f} "

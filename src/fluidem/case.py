@@ -175,6 +175,12 @@ class Particles(Strict):
     wall_contact: ContactLaw | None = Field(None, description="particle–wall law; default: the particle law")
     wall_pairs: list[WallPairContact] = Field(default_factory=list, description="per species(–wall) overrides")
     placement: Placement = Field(default_factory=Placement, description="initial positions and velocities")
+    force_step: Literal["split", "hoomans"] = Field(
+        "split", description="how the hard-sphere engine applies gravity and the gas force over a step DT: "
+        "'split', half the impulse (g + F/m) DT before the step's collision sequence (Hoomans 1996 eqs 30-32, "
+        "Fig. 3) and half after it, which makes free fall exact; 'hoomans', all of it before (eqs 33-34), an "
+        "energy error first order in DT (§5.1). Soft spheres integrate by velocity Verlet, a split step "
+        "already, and take 'split' only")
 
     @field_validator("species")
     @classmethod
@@ -196,6 +202,10 @@ class Particles(Strict):
                 raise ValueError(f"wall_pairs: species {wp.species!r} is not one of {sorted(names)}")
         if self.wall_contact is not None and type(self.wall_contact) is not type(self.contact):
             raise ValueError("wall_contact must use the same model as contact")
+        if self.force_step == "hoomans" and not getattr(type(self.contact), "instantaneous", False):
+            raise ValueError(f"force_step = 'hoomans' is the hard-sphere engine's (model = 'hard_sphere'); "
+                             f"contact model {self.contact.model!r} integrates by velocity Verlet, a split step: "
+                             f"use force_step = 'split' (the default)")
         return self
 
 

@@ -157,9 +157,9 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--steps", type=int, default=0, help="timed steps per problem (default: about 5 s of work)")
     b.add_argument("--json", metavar="FILE", help="also write the results as JSON")
     b.add_argument("--no-gas", action="store_true", help="skip the gas-step timings")
-    b.add_argument("--no-coupled", action="store_true", help="skip the coupled tsuji-jet timing")
+    b.add_argument("--no-coupled", action="store_true", help="skip the coupled tsuji-jet-background timing")
     b.add_argument("--coupled-until", type=float, default=0.25, metavar="T",
-                   help="simulated seconds of the coupled tsuji-jet timing (default 0.25)")
+                   help="simulated seconds of the coupled tsuji-jet-background timing (default 0.25)")
     b.add_argument("--no-hard-sphere", action="store_true", help="skip the hard-sphere hoomans-orifice timing")
     b.add_argument("--hard-until", type=float, default=0.1, metavar="T",
                    help="simulated seconds of the hoomans-orifice jet timed after its 0.5 s start-up (default 0.1)")

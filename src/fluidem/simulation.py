@@ -468,6 +468,7 @@ class Simulation:
             "max_overlap_rel": c["max_overlap_rel"],
             "kinetic_energy_J": e["kinetic_J"],
             "mean_bed_height_m": self.mean_height(),
+            "bed_surface_height_m": self.bed_surface_height(),
         }
         if self.case.particles.dimensions == 2:
             out["packing_fraction"] = P.surface_packing_fraction(eng)
@@ -492,15 +493,28 @@ class Simulation:
         return {"particle_time_s": self.particle_seconds, "gas_time_s": self.gas_seconds,
                 "output_time_s": self.output_seconds}
 
-    def mean_height(self) -> float:
+    def heights(self) -> np.ndarray | None:
+        """Centre heights above the floor [m], (N,): along −g from the wall box's lower corner (else the origin);
+        None without gravity."""
         g = self.engine.gravity
         gn = np.linalg.norm(g)
         if gn == 0:
-            return float("nan")
+            return None
         up = -g / gn
-        st = self.engine.state
         floor = float(self.engine.walls.box_lower @ up) if self.engine.walls.box_lower is not None else 0.0
-        return float(np.mean(st.position @ up) - floor)
+        return self.engine.state.position @ up - floor
+
+    def mean_height(self) -> float:
+        """Mean centre height above the floor [m] (``mean_bed_height_m``; Sun 2007 Fig. 9): not a surface."""
+        h = self.heights()
+        return float("nan") if h is None or h.size == 0 else float(np.mean(h))
+
+    def bed_surface_height(self) -> float:
+        """Height of the bed surface above the floor [m] (``analysis.fluidised.bed_surface_height``)."""
+        h = self.heights()
+        if h is None:
+            return float("nan")
+        return F.bed_surface_height(h, self.engine.state.radius, self.case.particles.dimensions == 2)
 
     # ------------------------------------------------------------ checkpoints
     def save_checkpoint(self, path: Path) -> None:

@@ -1,7 +1,7 @@
 """The built-in ``pour`` case turned into hard spheres (Hoomans et al. 1996 §5.1), its energy error and overlap.
 
 e = e_w = 0.9, μ = μ_w = 0.3 (the case sets no wall_contact, so the walls use the particle law) and the
-TC collapse remedy off (collapse_time = 0), as in Hoomans 1996.
+TC collapse remedy off (collapse_time = 0) and Hoomans' force step (eqs 33–34), as in Hoomans 1996.
 """
 from __future__ import annotations
 
@@ -12,9 +12,11 @@ from fluidem.case import load_case
 HARD = {"model": "hard_sphere", "restitution": 0.9, "friction": 0.3, "collapse_time": 0.0}
 
 
-def pour_case(dt=1e-4, **over):
-    """The hard-sphere pour with force step ``dt`` [s] and further ``--set`` style overrides."""
-    return load_case("pour", {"particles.contact": dict(HARD), "time.dt": dt, **over})
+def pour_case(dt=1e-4, force_step="hoomans", **over):
+    """The hard-sphere pour with force step ``dt`` [s] of the kind ``force_step`` and further ``--set`` style
+    overrides."""
+    return load_case("pour", {"particles.contact": dict(HARD), "particles.force_step": force_step, "time.dt": dt,
+                              **over})
 
 
 def relative_energy_error(eng, e0):

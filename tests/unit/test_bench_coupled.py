@@ -10,10 +10,10 @@ from fluidem.case import load_case
 
 
 def test_coupled_timing_row():
-    case = load_case("tsuji-jet")
+    case = load_case("tsuji-jet-background")
     until = 0.004
     t0 = time.perf_counter()
-    r = time_coupled("tsuji-jet", until=until, warmup=0.002, threads=1)
+    r = time_coupled("tsuji-jet-background", until=until, warmup=0.002, threads=1)
     outside = time.perf_counter() - t0
     # counts the case fixes: gas steps of DT in the window, 14 DEM sub-steps a gas step (the case's comment), particles
     gas_steps = round(until / case.gas.dt)

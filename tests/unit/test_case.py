@@ -99,6 +99,16 @@ def test_pour_defaults_resolved():
     assert case.particles.placement.method == "random"
 
 
+def test_force_step_defaults_to_split_and_hoomans_is_for_hard_spheres_only():
+    assert load_case("pour").particles.force_step == "split"  # velocity Verlet is a split step
+    assert load_case("hoomans-pour").particles.force_step == "hoomans"  # the paper's reproductions keep its step
+    assert load_case("pour", {"particles.contact": {"model": "hard_sphere", "restitution": 0.9, "friction": 0.3}}
+                     ).particles.force_step == "split"
+    msg = case_error("pour", {"particles.force_step": "hoomans"})
+    assert "force_step" in msg and "hard_sphere" in msg and "velocity Verlet" in msg
+    assert "force_step" in case_error("hoomans-pour", {"particles.force_step": "leapfrog"})
+
+
 # ---------------------------------------------------------------- overrides
 def test_override_nested_key():
     case = load_case("pour", {"particles.contact.restitution": 1.0})

@@ -6,7 +6,7 @@ for bit where an uninterrupted run ends, with the same output rows; two unusable
 its checkpoint at t = 0 resumes with t = 0 once in every output; a failed checkpoint write (a full disk)
 leaves both checkpoints as they were.
 
-Runs are short ``pour`` runs (500 soft spheres, no gas) in-process, and ``tsuji-jet`` (coupled) runs of a few
+Runs are short ``pour`` runs (500 soft spheres, no gas) in-process, and ``tsuji-jet-background`` (coupled) runs of a few
 milliseconds of simulated time.
 """
 from __future__ import annotations
@@ -304,7 +304,7 @@ def test_kill_before_the_first_periodic_checkpoint_writes_t0_once(tmp_path, caps
 
 
 # ---------------------------------------------------------------- a coupled case
-TSUJI = ["tsuji-jet", "--set", "output.probe_interval=0.0002", "--set", "output.snapshot_interval=0.0005"]
+TSUJI = ["tsuji-jet-background", "--set", "output.probe_interval=0.0002", "--set", "output.snapshot_interval=0.0005"]
 
 
 def test_coupled_kill_before_the_first_periodic_checkpoint_writes_t0_once(tmp_path, capsys):

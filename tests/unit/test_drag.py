@@ -251,9 +251,9 @@ def test_total_force_law_needs_no_pressure_force_and_the_cell_beta_exchange():
 
     base = {"coupling.drag": "hoomans1996_total", "coupling.pressure_gradient_force": False,
             "coupling.momentum_exchange": "cell_beta"}
-    assert load_case("tsuji-jet", base).coupling.drag.model == "hoomans1996_total"
+    assert load_case("tsuji-jet-background", base).coupling.drag.model == "hoomans1996_total"
     with pytest.raises(CaseError, match="set pressure_gradient_force = false"):
-        load_case("tsuji-jet", {**base, "coupling.pressure_gradient_force": True})
+        load_case("tsuji-jet-background", {**base, "coupling.pressure_gradient_force": True})
     for exchange in ("particle", "cell"):
         with pytest.raises(CaseError, match=f"momentum_exchange must be 'cell_beta'.*got '{exchange}'"):
-            load_case("tsuji-jet", {**base, "coupling.momentum_exchange": exchange})
+            load_case("tsuji-jet-background", {**base, "coupling.momentum_exchange": exchange})

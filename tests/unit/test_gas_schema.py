@@ -6,10 +6,10 @@ from fluidem.errors import CaseError
 
 
 def test_a_gas_step_whose_inflow_crosses_more_than_a_cell_is_refused_with_the_largest_allowed_step():
-    """tsuji-jet: the 39 m/s jet into 0.02 m tall cells allows DT up to 0.02 / 39 = 5.13e-4 s (upwind)."""
-    assert load_case("tsuji-jet", {"gas.dt": 5.1e-4}).gas.dt == 5.1e-4
+    """tsuji-jet-background: the 39 m/s jet into 0.02 m tall cells allows DT up to 0.02 / 39 = 5.13e-4 s (upwind)."""
+    assert load_case("tsuji-jet-background", {"gas.dt": 5.1e-4}).gas.dt == 5.1e-4
     with pytest.raises(CaseError) as err:
-        load_case("tsuji-jet", {"gas.dt": 1e-3})
+        load_case("tsuji-jet-background", {"gas.dt": 1e-3})
     msg = str(err.value)
     assert "gas.dt = 0.001 s" in msg and "39 m/s" in msg and "1.95 cells" in msg
     assert "at most 1 with convection = 'upwind'" in msg and "use gas.dt <= 0.000513 s" in msg
@@ -17,7 +17,7 @@ def test_a_gas_step_whose_inflow_crosses_more_than_a_cell_is_refused_with_the_la
 
 def test_tvd_convection_halves_the_allowed_step():
     with pytest.raises(CaseError, match=r"at most 0.5 with convection = 'tvd': use gas.dt <= 0.000256 s"):
-        load_case("tsuji-jet", {"gas.dt": 3e-4, "gas.convection": "tvd"})
+        load_case("tsuji-jet-background", {"gas.dt": 3e-4, "gas.convection": "tvd"})
 
 
 def test_pulses_count_at_their_peak_and_superficial_velocities_as_interstitial():
@@ -29,6 +29,6 @@ def test_pulses_count_at_their_peak_and_superficial_velocities_as_interstitial()
 
 def test_tables_count_at_their_fastest_point():
     bottom = {"kind": "inflow", "superficial": {"table": [[0.0, 0.0], [1.0, 50.0], [2.0, 10.0]]}}
-    assert load_case("tsuji-jet", {"gas.boundaries.bottom": bottom, "gas.dt": 4e-4}).gas.dt == 4e-4
+    assert load_case("tsuji-jet-background", {"gas.boundaries.bottom": bottom, "gas.dt": 4e-4}).gas.dt == 4e-4
     with pytest.raises(CaseError, match=r"50 m/s \(interstitial\) crosses 1.25 cells"):
-        load_case("tsuji-jet", {"gas.boundaries.bottom": bottom, "gas.dt": 5e-4})
+        load_case("tsuji-jet-background", {"gas.boundaries.bottom": bottom, "gas.dt": 5e-4})

@@ -173,11 +173,11 @@ def test_the_docstring_example_builds_the_pour_case():
 
 
 def test_a_coupled_case_built_from_the_top_level_objects_equals_the_toml_one():
-    """tsuji-jet's gas and coupling built in Python (fd.Gas, fd.gas.Inflow, fd.Coupling, fd.drag.Gidaspow)
+    """tsuji-jet-background's gas and coupling built in Python (fd.Gas, fd.gas.Inflow, fd.Coupling, fd.drag.Gidaspow)
     are the objects its TOML file gives."""
     import fluidem as fd
 
-    ref = fd.load_case("tsuji-jet")
+    ref = fd.load_case("tsuji-jet-background")
     inflow = fd.gas.Inflow(segments=[fd.gas.Segment(superficial=ref.gas.boundaries["bottom"].segments[0].superficial),
                                      fd.gas.Segment(superficial=39.0, start=0.07, end=0.08)])
     gas = fd.Gas(dt=ref.gas.dt, grid=fd.gas.Grid(cells=ref.gas.grid.cells, size=ref.gas.grid.size,

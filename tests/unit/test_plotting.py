@@ -485,13 +485,13 @@ def test_published_tables_of_the_sun_cases_show_this_runs_window_means():
     rows = {q: ours for q, _, ours in comparison_rows("goldschmidt", {**summary, "contact_drag_ratio_max_avg": 12.345})}
     assert rows[key] == "12.3 (mean over 5–10 s)"
     short = {**summary, "averages_window_s": [0.25, 0.5]}  # a shorter run: its second half, and the table says so
-    rows = {q: (pub, ours) for q, pub, ours in comparison_rows("tsuji-jet", short)}
+    rows = {q: (pub, ours) for q, pub, ours in comparison_rows("tsuji-jet-background", short)}
     assert rows["bulk coordination number"] == ("about 1.2 (Sun et al. 2007 Fig 5, central jet)",
                                                 "0.47 (mean over 0.25–0.5 s)")
     assert rows["multicontact ratio"][0].startswith("above 0.6")
     pub, ours = rows["dominant frequency of the pressure drop 20 cm above the inlet"]
     assert pub.startswith("Fig 3 (not given numerically)") and ours == "3.4 Hz (power spectrum over 0.25–0.5 s)"
-    assert comparison_rows("tsuji-jet", {})[0][2] == "not measured by this run"
+    assert comparison_rows("tsuji-jet-background", {})[0][2] == "not measured by this run"
 
 
 def test_published_tables_of_the_hoomans_cases():

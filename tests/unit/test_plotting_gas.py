@@ -215,7 +215,7 @@ def test_without_pressure_probes_the_pressure_comes_from_gas_h5_20_cm_up(copy_ru
     np.testing.assert_allclose(trace.lines[0].get_ydata(), g["p"][:, i, j] - 101325.0)
     assert trace.get_ylabel() == "p − 101325 Pa [Pa]"
     x, y = np.linspace(0.005, 0.145, 15), np.linspace(0.01, 0.89, 45)
-    assert pressure_probe_cell(x, y, 0.02) == (7, 10)  # the tsuji-jet grid: x = 0.075 m, y = 0.21 m
+    assert pressure_probe_cell(x, y, 0.02) == (7, 10)  # the tsuji-jet-background grid: x = 0.075 m, y = 0.21 m
 
 
 # ---------------------------------------------------------------- runs without gas fields

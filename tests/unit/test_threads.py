@@ -20,7 +20,7 @@ def test_default_threads_follow_the_particle_count(keep_threads):
     per = _threads.PARTICLES_PER_THREAD
     assert _threads.set_threads(None, 500) == 1  # the pour
     assert _threads.set_threads(None, per - 1) == 1
-    assert _threads.set_threads(None, 2 * per) == min(2, cores)  # the tsuji-jet bed
+    assert _threads.set_threads(None, 2 * per) == min(2, cores)  # the tsuji-jet-background bed
     assert _threads.set_threads(None, 100 * per) == cores
     assert _threads.set_threads(None) == cores  # no particle count: all cores
 

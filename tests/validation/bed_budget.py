@@ -11,12 +11,12 @@ gas force + walls − 1 = d(Σ m v)/dt / W closes the budget.
 
 Measured with the boundary faces folded and the pressure force paired (the defaults):
 
-    tsuji-jet     Δp A / W 0.852, gas force 0.877, gas gave up 0.877; bottom 0.068, side walls 0.018;
+    tsuji-jet-background     Δp A / W 0.852, gas force 0.877, gas gave up 0.877; bottom 0.068, side walls 0.018;
                   d(Σ m v)/dt / W −0.038 (the bed's upward momentum fell over this window)
     goldschmidt   Δp A / W 0.996, gas force 0.993, gas gave up 0.993; bottom 0.0065, side walls 0.003;
                   d(Σ m v)/dt / W 0.002
 
-In tsuji-jet the background gas is at u_mf, so part of the bed rests on the bottom; Δp A falls short of
+In tsuji-jet-background the background gas is at u_mf, so part of the bed rests on the bottom; Δp A falls short of
 the gas force by the jet's momentum flux, ρ u² over its cell (1.2 × 39² Pa over 1/15 of the width,
 ~3 % of W).
 """
@@ -33,7 +33,7 @@ from fluidem.simulation import Simulation
 def main(argv):
     over = dict(a.split("=", 1) for a in argv)
     over = {k: (v == "true" if v in ("true", "false") else v) for k, v in over.items()}
-    name = over.pop("case", "tsuji-jet")
+    name = over.pop("case", "tsuji-jet-background")
     sim = Simulation(fd.load_case(name).with_overrides(over))
     weight = float(sim.state.mass.sum()) * float(np.linalg.norm(sim.case.gravity))
     gd = sim.gas.grid

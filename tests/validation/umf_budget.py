@@ -42,7 +42,7 @@ exchanged, pressure unpaired): Δp / (W/A) 0.952-0.953, gas force 0.933-0.934 m 
 3-6 d, and 0.35-0.89 in the top layers (17-25 d): the bed slugs, the plug thrown up falls back onto the
 floor. The folded faces' sums are divided by their own control volume of 1.5 cells
 (``coupling.exchange.face_volumes``); divided by V_cell, β comes out 1.5× and the pressure voidage clips
-at the minimum in a packed bed: the lowest particles are pushed at 1.2× their weight and tsuji-jet's
+at the minimum in a packed bed: the lowest particles are pushed at 1.2× their weight and tsuji-jet-background's
 bed stands 5 cm higher (0.240 against 0.186 m over 5-10 s).
 """
 import math

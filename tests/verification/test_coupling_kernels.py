@@ -199,10 +199,10 @@ def ref_map(mapping, grid, pos, radius, vel):
 
 # ------------------------------------------------------------------ set-up
 def coupling(drag, mapping, pgf=True, dim2=True, n=600, seed=11, random_state=True, exchange="cell_beta"):
-    """GasCoupling of the tsuji-jet case over a stand-in engine holding random particles (no −V_p∇p for a
+    """GasCoupling of the tsuji-jet-background case over a stand-in engine holding random particles (no −V_p∇p for a
     law that gives the total gas force, which the case validation requires)."""
     pgf = pgf and not D.drag_laws.get(drag).total_force
-    case = fd.load_case("tsuji-jet").with_overrides({"coupling.drag": drag, "coupling.voidage": mapping,
+    case = fd.load_case("tsuji-jet-background").with_overrides({"coupling.drag": drag, "coupling.voidage": mapping,
                                                       "coupling.pressure_gradient_force": pgf,
                                                       "coupling.momentum_exchange": exchange})
     grid_probe = case.gas.build(case.gravity).grid

@@ -153,4 +153,4 @@ def test_pyamg_in_a_case_is_refused_with_the_reason():
     from fluidem.case import load_case
 
     with pytest.raises(CaseError, match=r"gas.linear_solver = 'pyamg': not offered: 'multigrid' .* faster"):
-        load_case("tsuji-jet", {"gas.linear_solver": "pyamg"})
+        load_case("tsuji-jet-background", {"gas.linear_solver": "pyamg"})

@@ -31,13 +31,14 @@ def hard(e=0.9, mu=0.3, **kw):
 
 
 def box_case(n, size, *, dimensions=2, contact=None, gravity=(0.0, 0.0, 0.0), dt=1e-4, seed=5, dist=None,
-             skin=None, wall_contact=None):
+             skin=None, wall_contact=None, force_step="split"):
     species = {"name": "p", "diameter": D, "density": DENSITY, "count": n}
     if dist is not None:
         species["size_distribution"] = dist
     data = {
         "name": "hs-box", "gravity": list(gravity),
         "particles": {"dimensions": dimensions, "species": [species], "contact": contact or hard(),
+                      "force_step": force_step,
                       "placement": {"method": "random", "seed": seed}},
         "walls": [{"name": "box", "kind": "box", "lower": [0.0, 0.0, 0.0], "upper": list(size)}],
         "time": {"end": 1.0, "dt": dt},
@@ -98,15 +99,17 @@ def reference_collide(i, j, pos, vel, omega, radius, mass, inertia, e, mu, wall_
         omega[j] += np.cross(cp - pos[j], -J) / inertia[j]
 
 
-def reference_run(pos, vel, omega, radius, mass, inertia, planes, gravity, dt, nsteps, e, mu):
+def reference_run(pos, vel, omega, radius, mass, inertia, planes, gravity, dt, nsteps, e, mu, split=False):
     """Hoomans 1996 Fig. 3: per step a force kick, then the earliest collision of all pairs and walls,
-    move everyone, collide, repeat; returns the list of (time, a, b or wall code)."""
+    move everyone, collide, repeat; returns the list of (time, a, b or wall code). ``split``: half the
+    kick before the collisions and half after them."""
     n = pos.shape[0]
     iu, ju = np.triu_indices(n, 1)
     sig = radius[iu] + radius[ju]
     events = []
+    kick = 0.5 * dt if split else dt
     for step in range(nsteps):
-        vel += gravity * dt  # eq. 33
+        vel += gravity * kick  # eq. 33 (its first half when split)
         t = 0.0
         while True:
             r = pos[iu] - pos[ju]
@@ -139,6 +142,8 @@ def reference_run(pos, vel, omega, radius, mass, inertia, planes, gravity, dt, n
             else:
                 reference_collide(a, -1, pos, vel, omega, radius, mass, inertia, e, mu, planes[-3 - bb][1])
             events.append((step * dt + t, a, bb))
+        if split:
+            vel += gravity * kick
     return events
 
 
@@ -146,8 +151,9 @@ def unordered(a, b):
     return (min(a, b), max(a, b)) if b >= 0 else (a, b)
 
 
+@pytest.mark.parametrize("force_step", ["split", "hoomans"])
 @pytest.mark.parametrize("dimensions", [2, 3])
-def test_event_detection_matches_the_all_pairs_reference(dimensions):
+def test_event_detection_matches_the_all_pairs_reference(dimensions, force_step):
     """Same collision sequence and final state as the brute-force Fig. 3 algorithm.
 
     40 polydisperse spheres (d = 3–5 mm; area fraction 0.35 in 2D, volume fraction 0.11 in
@@ -158,12 +164,13 @@ def test_event_detection_matches_the_all_pairs_reference(dimensions):
     The two codes round differently (the reference moves every particle at every event),
     and a dense gas amplifies a difference by a factor of a few per collision. Measured:
     times 1.4e-10 DT; positions 3e-13 D; velocities 2e-12 m/s; spins 4e-12 of v/R. A wrong
-    or missed event changes the results at order one.
+    or missed event changes the results at order one. Both force steps (``particles.force_step``), each
+    against the reference with its own kicks.
     """
     L = 0.03 if dimensions == 2 else 0.018
     size = (L, L, 0.004) if dimensions == 2 else (L, L, L)
     case = box_case(40, size, dimensions=dimensions, contact=hard(0.9, 0.3, collapse_time=0.0), gravity=(0.0, -9.81, 0.0),
-                    dist={"kind": "uniform", "min": 3e-3, "max": 5e-3}, seed=11, skin=0.4 * D)
+                    dist={"kind": "uniform", "min": 3e-3, "max": 5e-3}, seed=11, skin=0.4 * D, force_step=force_step)
     eng = HardSphereEngine(case)
     random_velocities(eng, 1.0, seed=2)
     st = eng.state
@@ -172,7 +179,8 @@ def test_event_detection_matches_the_all_pairs_reference(dimensions):
     nsteps = 60
     eng.record_collisions(10000)
     eng.advance(nsteps)
-    events = reference_run(*ref, st.radius, st.mass, st.inertia, planes, eng.gravity, eng.dt, nsteps, 0.9, 0.3)
+    events = reference_run(*ref, st.radius, st.mass, st.inertia, planes, eng.gravity, eng.dt, nsteps, 0.9, 0.3,
+                           split=force_step == "split")
     log = eng.logged
     assert len(events) > 150 and eng.wall_collisions > 30, "the test gas must collide often, also with walls"
     assert len(log) == len(events)
@@ -180,6 +188,44 @@ def test_event_detection_matches_the_all_pairs_reference(dimensions):
     np.testing.assert_allclose(log[:, 0], [t for t, _, _ in events], rtol=0, atol=1e-8 * eng.dt)
     for got, want, scale in zip((st.position, st.velocity, st.omega), ref, (D, 1.0, 1.0 / (D / 2))):
         np.testing.assert_allclose(got, want, rtol=0, atol=1e-9 * scale)
+
+
+@pytest.mark.parametrize("dimensions", [2, 3])
+def test_hoomans_step_is_the_split_step_half_a_kick_later(dimensions):
+    """Under gravity alone the two force steps give the same collisions of the same trajectories.
+
+    Hoomans' step K_DT D (kick, then the collision sequence D) repeated n times is
+    K_DT/2 (K_DT/2 D K_DT/2)^n K_−DT/2 (applied from the left): the split step started from v_0 + g DT/2,
+    with every reported velocity g DT/2 behind the split one. So a split run from v_0 + g DT/2 must log
+    Hoomans' collisions one for one (pairs, walls, times) and end at its positions, with velocities g DT/2
+    ahead. The gas of
+    the reference test (40 polydisperse spheres, e = 0.9, μ = 0.3, 60 steps) and its tolerances, for the
+    same reason: the two runs round differently (the kicks are split), and a dense gas amplifies that.
+    This is why the split step keeps Hoomans' collision sequence (Fig. 3, eqs 30–32) and differs only in
+    the instant its velocities are reported at, which the energy of eq. 51 sees."""
+    L = 0.03 if dimensions == 2 else 0.018
+    size = (L, L, 0.004) if dimensions == 2 else (L, L, L)
+    runs = {}
+    for step in ("hoomans", "split"):
+        case = box_case(40, size, dimensions=dimensions, contact=hard(0.9, 0.3, collapse_time=0.0),
+                        gravity=(0.0, -9.81, 0.0), dist={"kind": "uniform", "min": 3e-3, "max": 5e-3}, seed=11,
+                        skin=0.4 * D, force_step=step)
+        eng = HardSphereEngine(case)
+        random_velocities(eng, 1.0, seed=2)
+        if step == "split":
+            eng.state.velocity[...] += 0.5 * eng.dt * eng.gravity
+        eng.record_collisions(10000)
+        eng.advance(60)
+        runs[step] = eng
+    h, s = runs["hoomans"], runs["split"]
+    assert len(h.logged) > 150 and h.wall_collisions > 30
+    assert len(s.logged) == len(h.logged)
+    assert [unordered(int(a), int(b)) for a, b in s.logged[:, 1:3]] == \
+        [unordered(int(a), int(b)) for a, b in h.logged[:, 1:3]]
+    np.testing.assert_allclose(s.logged[:, 0], h.logged[:, 0], rtol=0, atol=1e-8 * h.dt)
+    np.testing.assert_allclose(s.state.position, h.state.position, rtol=0, atol=1e-9 * D)
+    np.testing.assert_allclose(s.state.velocity - 0.5 * h.dt * h.gravity, h.state.velocity, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(s.state.omega, h.state.omega, rtol=0, atol=1e-9 / (D / 2))
 
 
 def test_elastic_frictionless_spheres_conserve_energy_over_a_million_collisions():

@@ -1,6 +1,6 @@
 """Gas and particles exchange drag as equal and opposite momentum (Sun 2007 eqs 28-33).
 
-1. ``exchange_balance`` of one gas step in the tsuji-jet box (walls, inflow, outlet) with
+1. ``exchange_balance`` of one gas step in the tsuji-jet-background box (walls, inflow, outlet) with
    random particles and a random gas state: the drag the gas lost on the faces it solves plus
    the drag handed to boundary faces equals the particles' drag, to round-off, for the
    ``particle`` and ``cell`` exchanges; the unpaired ``cell_beta`` form (MFIX in Sun 2007)
@@ -42,7 +42,7 @@ X_OFFSET = 0.2  # in cells; 40 gas steps move a particle < 0.5 cm, so each cell 
 
 
 def tsuji_coupling(exchange, mapping="centroid-volume", seed=3, n=600, **options):
-    case = fd.load_case("tsuji-jet").with_overrides({"coupling.momentum_exchange": exchange,
+    case = fd.load_case("tsuji-jet-background").with_overrides({"coupling.momentum_exchange": exchange,
                                                       "coupling.voidage": MAPPINGS[mapping],
                                                       **{f"coupling.{k}": v for k, v in options.items()}})
     grid = case.gas.build(case.gravity).grid

@@ -1,6 +1,6 @@
 """The polydisperse drag of a coupled run against the DEM book 2012 two-phase chapter, eqs 7-12.
 
-A frozen bidisperse bed on the tsuji-jet grid: every cell of its lower rows holds one small and one
+A frozen bidisperse bed on the tsuji-jet-background grid: every cell of its lower rows holds one small and one
 large sphere (so every cell, and the bed, has the same Sauter mean D̄, eq. 10), the gas flows
 uniformly through it at a uniform voidage. Then each particle of species i must feel
 f_di = y_i² f̄_d (eq. 12), f̄_d the law's drag on a sphere of diameter D̄ (Reynolds number with D̄)
@@ -31,7 +31,7 @@ def frozen_bed(drag="beetstra", exchange="cell_beta", diameters=(D_SMALL, D_LARG
                  "coupling.pressure_gradient_force": False}
     if polydisperse is not None:
         overrides["coupling.polydisperse"] = polydisperse
-    case = fd.load_case("tsuji-jet").with_overrides(overrides)
+    case = fd.load_case("tsuji-jet-background").with_overrides(overrides)
     grid = case.gas.build(case.gravity).grid
     nx = grid.shape[0]
     pos, radius = [], []

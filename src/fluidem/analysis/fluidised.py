@@ -18,7 +18,12 @@ Definitions (Sun 2007, §4):
   ε > 0.8 not connected to the freeboard, at least 3 cells; ``bubble_detected`` in the
   summary says whether one formed at any probe time.
 - mean particle height (Fig 9): the arithmetic mean of the particle centres' heights
-  above the floor.
+  above the floor (``mean_particle_height_m``; not a surface height).
+- bed surface height (``bed_surface_height``; this package's definition, no paper's): the
+  height above the floor where the horizontally averaged solids fraction φ(z) falls below
+  ``BED_SURFACE_FRACTION`` (one half) of its mean over the bed beneath, the axial-profile
+  reading of a bed's height. A few particles thrown up into the freeboard stay far below that
+  level and do not move it; a uniform slab gives its top within a tenth of a radius.
 
 Time averages for ``summary.json`` are taken from ``probes.csv`` over 5–10 s (Sun's
 window) when the run reaches 10 s, else over the second half of the run; the window
@@ -186,11 +191,64 @@ def slug_detected(grid, voidage: np.ndarray, threshold: float = BUBBLE_VOIDAGE,
     return bubble_width_fraction(grid, voidage, threshold) >= min_width_fraction - 1e-12
 
 
+BED_SURFACE_FRACTION = 0.5  # the surface: where φ(z) falls below this fraction of the mean φ of the bed beneath
+PROFILE_STEPS_PER_DIAMETER = 20  # resolution of the solids-fraction profile of ``bed_surface_height``
+
+
+def solids_profile(heights, radius, dim2: bool, step: float) -> np.ndarray:
+    """Solids per unit height at z_b = (b + ½) step above the floor, b = 0, 1, …: Σ_i of the chord
+    2 √(R_i² − (z_b − h_i)²) of each disc (``dim2``) or the section π (R_i² − (z_b − h_i)²) of each sphere,
+    [m] or [m²]. Over a cross-section it is the horizontally averaged solids fraction φ(z_b), up to that
+    constant. ``heights`` (N,) centre heights above the floor [m], ``radius`` (N,) [m]; vectorised over the
+    (N, K) bins each particle spans."""
+    h = np.asarray(heights, float)
+    r = np.asarray(radius, float)
+    k = int(np.ceil(2.0 * r.max() / step)) + 2
+    first = np.maximum(np.floor((h - r) / step).astype(np.int64), 0)
+    bins = first[:, None] + np.arange(k)[None, :]
+    d2 = r[:, None] ** 2 - ((bins + 0.5) * step - h[:, None]) ** 2
+    w = 2.0 * np.sqrt(np.maximum(d2, 0.0)) if dim2 else np.pi * np.maximum(d2, 0.0)
+    return np.bincount(bins.ravel(), weights=w.ravel(), minlength=int(bins.max()) + 1)
+
+
+def bed_surface_height(heights, radius, dim2: bool, fraction: float = BED_SURFACE_FRACTION) -> float:
+    """Height of the bed surface above the floor [m]: the top of the highest level z where the horizontally
+    averaged solids fraction φ(z) is at least ``fraction`` of its mean over [0, H], H the surface itself.
+
+    H is found by iteration from the highest particle top: the mean over [0, H] is taken, H moves down to the
+    highest level that reaches ``fraction`` of it, and so on until H stays (a lower H raises the mean, so H
+    only falls; two or three rounds). φ is sampled ``PROFILE_STEPS_PER_DIAMETER`` times per mean diameter
+    (``solids_profile``); the width of the bed cancels from the criterion. Particles thrown up into the
+    freeboard hold φ there far below half the bed's, unless they crowd a level as densely as the bed; a
+    uniform slab's profile falls from its mean to zero within its top layer and gives the slab's top within
+    a tenth of a radius. NaN without particles. (This package's definition: the axial-profile reading of a
+    bed's height, which ``mean_particle_height_m``, a mean of centre heights, is not.)
+    """
+    h = np.asarray(heights, float)
+    r = np.asarray(radius, float)
+    if h.size == 0:
+        return math.nan
+    step = 2.0 * float(r.mean()) / PROFILE_STEPS_PER_DIAMETER
+    prof = solids_profile(h, r, dim2, step)
+    top = float(np.max(h + r))
+    cum = np.cumsum(prof) * step  # solids below the top of each bin
+    for _ in range(200):
+        nb = max(min(int(np.ceil(top / step - 1e-9)), prof.size), 1)
+        mean = cum[nb - 1] / (nb * step)
+        keep = np.flatnonzero(prof[:nb] >= fraction * mean)
+        new = (keep[-1] + 1) * step if keep.size else top
+        if new >= top:
+            break
+        top = new
+    return float(min(top, np.max(h + r)))
+
+
 def bed_probes(sim) -> dict[str, float]:
-    """probes.csv columns of a fluidised bed: N_c statistics, mean height, pressure drop."""
+    """probes.csv columns of a fluidised bed: N_c statistics, mean and surface height, pressure drop."""
     eng = sim.engine
     nc = contact_numbers(eng)
-    out = {"mean_particle_height_m": sim.mean_height(), "multicontact_ratio": multicontact_ratio(nc),
+    out = {"mean_particle_height_m": sim.mean_height(), "bed_surface_height_m": sim.bed_surface_height(),
+           "multicontact_ratio": multicontact_ratio(nc),
            "particles_in_contact": int(np.count_nonzero(nc >= 1))}
     gas = getattr(sim, "gas", None)
     if gas is not None:
@@ -252,6 +310,7 @@ def averaging_window(t_end: float, window=SUN_WINDOW, t_start: float = 0.0) -> t
 
 AVERAGED = {  # probes.csv column → summary key of its time average
     "mean_particle_height_m": "mean_particle_height_avg_m",
+    "bed_surface_height_m": "bed_surface_height_avg_m",
     "coordination": "coordination_number_avg",
     "multicontact_ratio": "multicontact_ratio_avg",
     "pressure_drop_20cm_Pa": "pressure_drop_20cm_avg_Pa",

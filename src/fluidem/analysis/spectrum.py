@@ -85,7 +85,7 @@ def power_spectrum(t, signal) -> Spectrum | None:
     each with its mean removed.
 
     Why this parametrisation: a fluidised bed's pressure signal is broad-band with one or two modes
-    of a few hertz (the tsuji-jet bed: near 2 and 6 Hz). A single periodogram of the whole record has
+    of a few hertz (the tsuji-jet-background bed: near 2 and 6 Hz). A single periodogram of the whole record has
     the finest resolution (1/T) but a scatter of 100 % in every bin, so its highest bin jumps between
     modes of like power from record to record; averaging three half-record segments cuts that scatter
     while the resolution, 2/T (0.4 Hz over Sun's 5 s window), still separates such modes. The segment

@@ -37,7 +37,7 @@ on every face: the pressure force is exchanged as exactly as the drag (``couplin
 Σ_faces V (β_f u_f − (β u_s)_f) = Σ_c D_c exactly (each face is half of two cells).
 
 Array indices in the per-particle loops are cast to unsigned (``U``): Numba adds wrap-around code
-for negative values to every access with a signed index (tsuji-jet bed at 1.5 s, one thread,
+for negative values to every access with a signed index (tsuji-jet-background bed at 1.5 s, one thread,
 bitwise the same results: ``deposit`` 245 → 209 µs, ``particle_forces_split`` 204 → 158 µs).
 
 ``deposit`` computes every K_p first (the interpolation and the drag law, most of its work), then

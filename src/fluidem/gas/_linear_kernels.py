@@ -139,7 +139,7 @@ def band_factor(data, indices, indptr, place, BINV, BLU, rows, j0):
             for b in range(BINV.shape[2]):  # with the padding columns (``_invert_in_place``)
                 BINV[jb, a, b] = 0.0
     blk, at = place[0], place[1]  # block of each unknown and its place in it (a division per matrix entry
-    # here took 33 µs of a tsuji-jet factorisation)
+    # here took 33 µs of a tsuji-jet-background factorisation)
     for col in range(n):
         jc = blk[col]
         ic = at[col]

@@ -836,7 +836,7 @@ class GasSolver:
         less than ``jacobian_reuse``, so the converged state depends, within the tolerance, on which
         matrix was factorised when. A run resumed with fresh factors then drifts from the uninterrupted run
         at the tolerance's level, and a bubbling bed, being chaotic, makes that a different flow within a
-        second (tsuji-jet: particles 0.14 m apart 0.1 s after a resume). With these arrays restored
+        second (tsuji-jet-background: particles 0.14 m apart 0.1 s after a resume). With these arrays restored
         (``restore_factors``) the resumed run goes on bit for bit. The band and SuperLU paths (the
         multigrid makes its hierarchy anew every iteration)."""
         ipar = self._ipar

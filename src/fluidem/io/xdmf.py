@@ -3,7 +3,7 @@
 The particle and gas writers each keep an index file (``particles.xdmf``, ``gas.xdmf``) that lists
 every snapshot written so far, so ParaView can open a run while it goes on or after it stopped.
 Rewriting the whole file at every snapshot costs O(snapshots) each time (at 400 snapshots of the
-tsuji-jet case: 1 MB, 10–20 ms a snapshot, a few per cent of the run), so ``XdmfIndex`` writes the
+tsuji-jet-background case: 1 MB, 10–20 ms a snapshot, a few per cent of the run), so ``XdmfIndex`` writes the
 file once and then appends: the new grid and the closing tags go in one write over the old
 closing tags. A process killed between two snapshots leaves a complete, valid file; one write of a
 few kilobytes to a regular file is not interrupted half-way by a signal. Whenever the file is not

@@ -1,8 +1,9 @@
 """Compiled event-driven hard-sphere dynamics (Hoomans et al. 1996, §2.3–2.5, Fig. 3).
 
 ``advance`` runs many force steps DT in one call. Each step: every velocity gets
-(g + F/m) DT (eqs 33–34); then the binary collisions inside the step are processed
-in time order with free flight in between (eq. 32), each by eqs 10–29.
+(g + F/m) DT (eqs 33–34), all of it before the collisions (Hoomans) or half before and
+half after them (split, see ``hardsphere``); the binary collisions inside the step are
+processed in time order with free flight in between (eq. 32), each by eqs 10–29.
 
 Event scheme (all inside one step; nothing is predicted past its end):
 
@@ -656,11 +657,28 @@ def _events(t_abs0, dt, P, Q, species, pp, pw, walls, wall_normal, nbr_start, nb
     return EV_END, dt, events
 
 
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _kick(n, P, Q, gx, gy, gz, ext_force, h, dim2):
+    """v += (g + F/m) h for every particle (Hoomans eqs 33–34 with the impulse of a time h [s]); 2D: no z."""
+    for i in range(n):
+        o = P_ROW * i
+        im = Q[i, Q_IM]
+        P[o + P_VX] += (gx + ext_force[i, 0] * im) * h
+        P[o + P_VY] += (gy + ext_force[i, 1] * im) * h
+        if not dim2:
+            P[o + P_VZ] += (gz + ext_force[i, 2] * im) * h
+
+
 @njit(cache=True, error_model="numpy")
 def advance(pos, vel, omega, radius, inv_mass, inv_inertia, species, pp, pw, wall_point, wall_normal, gravity,
             ext_force, dim2, nbr_start, nbr, up_start, up, ref_pos, skin, last_coll, step0, dt, nsteps, max_events,
-            counters, energy, log, info, work):
+            counters, energy, log, info, work, split):
     """Run ``nsteps`` force steps of length ``dt`` (Hoomans 1996 Fig. 3 per step).
+
+    ``split`` False: Hoomans' force step, v += (g + F/m) DT (eqs 33–34), then the collisions of the step in
+    time order with straight flight between them (eqs 30–32). ``split`` True: the same collision sequence
+    between two half kicks, v += (g + F/m) DT/2 before it and after it (a kick–drift–kick, Strang splitting
+    of the external force from the collisions): free fall is then exact and the step time-reversible.
 
     Parameters
     ----------
@@ -679,6 +697,7 @@ def advance(pos, vel, omega, radius, inv_mass, inv_inertia, species, pp, pw, wal
         (absolute time, a, b or WALL_EVENT0 − w, E_n, E_t)
     info : (3,) float64, on failure (step index, time in step, events)
     work : ``hardsphere.workspace(N)``
+    split : bool, the split force step (above) instead of Hoomans'
 
     Returns (nbr_start, nbr, up_start, up, status); status OK or TOO_MANY_EVENTS. On OK, pos, vel, omega,
     ref_pos and last_coll hold the new state; on TOO_MANY_EVENTS they are left as they were
@@ -701,17 +720,13 @@ def advance(pos, vel, omega, radius, inv_mass, inv_inertia, species, pp, pw, wal
     # unsigned views of the neighbour list (the same bits: all entries are >= 0)
     nbr_start_u = nbr_start.view(np.uint64)
     nbr_u = nbr.view(np.uint32)
+    kick = 0.5 * dt if split else dt  # the force impulse before the collisions, per unit acceleration
     for s in range(nsteps):
         t_abs0 = (step0 + s) * dt
-        # force step: v = v* + (g + F/m) DT, Hoomans eqs 33–34
+        # force step: v = v* + (g + F/m) DT before the collisions (Hoomans eqs 33–34), or its first half (split)
+        _kick(n, P, Q, gx, gy, gz, ext_force, kick, dim2)
         for i in range(n):
-            o = P_ROW * i
-            im = Q[i, Q_IM]
-            P[o + P_VX] += (gx + ext_force[i, 0] * im) * dt
-            P[o + P_VY] += (gy + ext_force[i, 1] * im) * dt
-            if not dim2:
-                P[o + P_VZ] += (gz + ext_force[i, 2] * im) * dt
-            P[o + P_T] = 0.0
+            P[P_ROW * i + P_T] = 0.0
         _predict_all(0.0, dt, P, up_start, up, walls, R, half_skin, ncoll, ev, ev_time, T, L, planar, F)
         events = np.int64(0)
         t = 0.0
@@ -742,6 +757,8 @@ def advance(pos, vel, omega, radius, inv_mass, inv_inertia, species, pp, pw, wal
             return nbr_start, nbr, up_start, up, TOO_MANY_EVENTS
         for i in range(n):  # free flight to the end of the step
             _move(i, dt, P)
+        if split:  # the second half of the force impulse, after the collisions
+            _kick(n, P, Q, gx, gy, gz, ext_force, kick, dim2)
     for i in range(n):
         o = P_ROW * i
         pos[i, 0] = P[o + P_X]

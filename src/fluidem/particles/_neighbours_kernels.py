@@ -9,7 +9,7 @@ into per-particle sums without races. The slab partition depends on geometry
 only, so sums have the same order for any thread count: results are bitwise
 independent of the number of threads.
 
-How ``build_pairs`` finds the pairs, and why so. Measured with one thread on the tsuji-jet
+How ``build_pairs`` finds the pairs, and why so. Measured with one thread on the tsuji-jet-background
 state at t = 1.5 s (2400 spheres in one layer, 24,800 candidates, 4006 pairs) and on the
 10,000-sphere 3D bed of ``fluidem bench`` (584,000 candidates, 46,052 pairs). The former build filled each particle's row in turn: 27 (9)
 cells, a loop of 0-6 candidates each, read through ``members[m]`` from the particle arrays,
@@ -32,7 +32,7 @@ where a loop over candidates should take 2-3 ns. Three causes:
 So each pair of neighbouring cells is visited once (a cell's later particles and the 13 (4)
 cells "after" it: 5 (2) runs of slots a particle), the pairs within the cut-off are appended
 without a branch as owner << 32 | partner, and two stable counting sorts (by partner, then by
-owner) make the CSR with every row sorted. A build went from 690 to 170 µs (tsuji-jet) and
+owner) make the CSR with every row sorted. A build went from 690 to 170 µs (tsuji-jet-background) and
 from 6.6 to 1.9 ms (10k bed). The pairs are the former ones (the same cells, the same
 expressions for the distance and the cut-off, symmetric in i and j to the last bit) and their
 order is fixed by the sort, so the output is bitwise the former one for any chunking and
@@ -290,7 +290,7 @@ def _csr_of_pairs(n, out, used):
 
     Two stable counting sorts, by partner then by owner, leave each row sorted: no sort per row
     (an insertion sort per row after the scatter by owner cost twice as much, 51 against 27 µs
-    on the tsuji-jet state, 610 against 320 µs on the 10k bed, its short loops mispredicted).
+    on the tsuji-jet-background state, 610 against 320 µs on the 10k bed, its short loops mispredicted).
     """
     npair = 0
     for c in range(used.shape[0]):
@@ -338,7 +338,7 @@ def max_slabs(n):
 
     The pair forces run slab by slab (``_pair_kernels``), with a fixed cost per slab, and threads take
     contiguous blocks of slabs (two parities each), so a bed needs enough slabs to share out evenly and
-    few enough that each slab's contacts fill the vector chunks. On the 2400-sphere tsuji-jet bed
+    few enough that each slab's contacts fill the vector chunks. On the 2400-sphere tsuji-jet-background bed
     (about 590 contacts among 3859 listed pairs) the pair phase took 59 µs in 64 slabs and 51 µs in 16 (one
     thread); the 10,000- and 100,000-sphere beds keep 64. A function of the particle count only, never
     of the thread count: the sums stay bitwise the same for any number of threads.

@@ -10,7 +10,7 @@ The contact law runs vectorised over chunks of contacts (``_pair_kernels``, call
 ``pair_forces``). The per-particle loops (``_gather_range``) and those of ``_pair_kernels``
 index with unsigned integers (``U``): with a signed index Numba adds wrap-around code for negative
 values to every ``a[k]``, which LLVM cannot drop in these loops (the former scalar pair loop, one
-thread, bitwise the same sums: tsuji-jet bed at 1.5 s 139 → 100 µs per step, the 10k 3D bench bed
+thread, bitwise the same sums: tsuji-jet-background bed at 1.5 s 139 → 100 µs per step, the 10k 3D bench bed
 2.28 → 1.92 ms).
 """
 import math
@@ -99,7 +99,7 @@ def thread_blocks(row_start, slab_start, slab_members, nthreads):
     gathering pass: in slab order (``reorder``) those are the same particles, so each thread keeps
     its particles' data in its own core's cache from pass to pass and step to step. Dealing
     slabs round-robin (and particles in fixed chunks) instead moved that data between the cores
-    at every pass: 2 threads took 160 µs for the pair loop of the 2400-particle tsuji-jet bed
+    at every pass: 2 threads took 160 µs for the pair loop of the 2400-particle tsuji-jet-background bed
     against 117 µs on one. Any split gives the same sums (``pair_forces``)."""
     nslab = slab_start.shape[0] - 1
     block = np.empty(nthreads + 1, dtype=np.int64)
@@ -195,7 +195,7 @@ def wall_axes(wall_normal):
 
     For such a wall the gap n·(x − p) is ±(x_k − p_k), computed so in _gather_range: the same
     number as the full dot product (the other two terms are zero), at a fraction of the cost
-    (gather_forces of the tsuji-jet bed: 58 → 45 µs per step with its four box sides)."""
+    (gather_forces of the tsuji-jet-background bed: 58 → 45 µs per step with its four box sides)."""
     nw = wall_normal.shape[0]
     axis = np.full(nw, -1, dtype=np.int64)
     for w in range(nw):
@@ -261,7 +261,7 @@ def _gather_body(flat, lo, hi, pos, vel, omega, radius, mass, species, pw, walls
     update = mode > 0
     # walls first, for the particles that can reach one (near_walls: few), into the sums: force, and −n × F_t per
     # unit lever arm (the lever is the radius) as for pairs. Kept out of the main loop below, whose inner loop
-    # over walls and its branches made it 2.5 times slower than it is without them (tsuji-jet bed)
+    # over walls and its branches made it 2.5 times slower than it is without them (tsuji-jet-background bed)
     for i_ in range(lo, hi):
         i = U(i_)
         nq = near_count[i]
@@ -575,7 +575,7 @@ def _kick_drift(pos, vel, omega, force, torque, inv_mass, inv_inertia, dt, ref_p
     """Half kick then drift; returns how many particles moved more than sqrt(limit2) since the last build.
     (Once per ``advance`` call; the later steps' kicks and drifts are fused into gather_forces. Components
     written out with unsigned indices: a loop over them with signed ones took 25 µs for the 2400 particles
-    of the tsuji-jet bed, now 5, and a coupled run calls advance every gas step.)"""
+    of the tsuji-jet-background bed, now 5, and a coupled run calls advance every gas step.)"""
     n = pos.shape[0]
     half = 0.5 * dt
     moved = 0

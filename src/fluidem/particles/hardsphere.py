@@ -1,10 +1,31 @@
 """Event-driven hard-sphere engine (Hoomans et al. 1996): owns particle state, collision laws and walls.
 
 ``HardSphereEngine.advance(nsteps)`` runs that many force steps DT in one compiled call
-(``_hardsphere_kernels.advance``): each step adds (g + F/m) DT to every velocity
-(Hoomans eqs 33–34), then processes the binary collisions inside DT one at a time in
-time order with free flight in between (eqs 30–32, Fig. 3), each by eqs 10–29. The
-interface is that of ``SoftSphereEngine`` so that ``Simulation``, the gas coupling
+(``_hardsphere_kernels.advance``). Each step processes the binary collisions inside DT one at
+a time in time order with free flight in between (eqs 30–32, Fig. 3), each by eqs 10–29, and
+gives every velocity the impulse of gravity and the gas force, (g + F/m) DT (eqs 33–34):
+
+* ``particles.force_step = "split"`` (the default): half of it before the collision sequence
+  and half after (kick–drift–kick). Free flight is then exact (the parabola to round-off) and
+  positions and velocities belong to the same instant.
+* ``"hoomans"``: all of it before the sequence, as Hoomans 1996 (Fig. 7). Free flight gains
+  ½ a DT t in position, and the energy of eq. 51 the offset ½ m g·DT v: −½ m g² DT t in free
+  fall, the first-order error of §5.1.
+
+Why "split" is the default: it keeps the paper's collision sequence. Inside the step the
+velocities change only by collisions and the particles fly straight (§2.4, eqs 30–32), and the
+collision-detection model is unchanged. More than that, under gravity alone the two steps give
+the same trajectories, collision for collision: Hoomans' step n times is
+K_DT/2 (K_DT/2 D K_DT/2)^n K_−DT/2 (K a kick, D the sequence), the split step started half a
+kick later, with reported velocities half a kick apart
+(``tests/verification/test_hardsphere_dynamics.py``). Only the instant at which the velocities
+are reported differs, and with it the energy budget. With a gas force that changes from step
+to step, Hoomans' step is the split step whose second half kick takes the next step's force;
+the split step takes the step's own force for both halves (the next one is not known yet), so
+the two then differ by O(DT²) in velocity per step. The built-in reproductions of the paper
+(``hoomans-*``) keep ``"hoomans"``.
+
+The interface is that of ``SoftSphereEngine`` so that ``Simulation``, the gas coupling
 (``ext_force``) and checkpoints work unchanged; the engine also runs on its own.
 """
 from __future__ import annotations
@@ -56,6 +77,7 @@ class HardSphereEngine(ParticleEngine):
     Attributes besides the soft-sphere interface (``case, dim2, walls, state, inv_mass,
     gravity, ext_force, wall_point0, wall_normal, wall_motion, dt, time, steps, rebuilds``):
 
+    force_step : str, "split" or "hoomans" (``particles.force_step``; see the module docstring)
     collisions, wall_collisions : int, cumulative collision counts (wall ones included in the first)
     sticking_collisions : int, collisions of the sticking class (eq. 25)
     dissipated_normal_J, dissipated_tangential_J : float, sums of eq. 23 and of eqs 27/29 [J]
@@ -83,6 +105,7 @@ class HardSphereEngine(ParticleEngine):
         st = self.state
         self.pp, self.pw = self._contact_tables()
         self.dt = case.time.dt if case.time.dt is not None else DEFAULT_DT
+        self.force_step = case.particles.force_step
         dmax = 2.0 * float(st.radius.max()) if st.n else 0.0
         self.skin = case.neighbours.skin if case.neighbours.skin is not None else DEFAULT_SKIN_DIAMETERS * dmax
         if st.n and not self.skin > 0:
@@ -176,7 +199,8 @@ class HardSphereEngine(ParticleEngine):
             st.position, st.velocity, st.omega, st.radius, self.inv_mass, self.inv_inertia, st.species, self.pp,
             self.pw, self.wall_point0, self.wall_normal, self.gravity, self.ext_force, self.dim2, self.nbr_start,
             self.nbr, self.up_start, self.up, self.ref_pos, self.skin, self.last_collision, self.steps, self.dt, nsteps,
-            self.max_events_per_step, self.counters, self.energy, self.event_log, info, self._work)
+            self.max_events_per_step, self.counters, self.energy, self.event_log, info, self._work,
+            self.force_step == "split")
         if status != K.OK:  # the kernel left the particle arrays as they were
             self.counters[...] = counters
             self.energy[...] = energy
@@ -233,8 +257,11 @@ class HardSphereEngine(ParticleEngine):
     def energies(self) -> dict[str, float]:
         """Kinetic, rotational, potential (−Σ m g·x, relative to the origin) and dissipated energy [J].
 
-        Their sum is Hoomans' E_tot (1996 eq. 51), constant up to the O(DT) error of eqs 32–34
-        when no gas acts.
+        Their sum is Hoomans' E_tot (1996 eq. 51), constant when no gas acts up to the error of the force
+        step: in free flight none with ``force_step = "split"`` and ½ m g·DT (v − v_0) with ``"hoomans"``;
+        each wall collision −(1 + e) m g·n y_mid with y_mid the mid-step gap on the straight path (the wall's
+        impulse does work in a step that does not bend under gravity; at the floor of a bed at rest, at most
+        ½ M g² DT per unit time, first order in DT for both steps).
         """
         e = super().energies()
         diss = self.dissipated_normal_J + self.dissipated_tangential_J

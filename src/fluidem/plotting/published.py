@@ -87,7 +87,7 @@ _BUBBLE_KEYS = {"summary_key": "bubble_detected", "fallback_keys": ("bubble",), 
                 "details": (("largest", "bubble_max_area_m2", 1e4, "cm²"),)}
 _SUN_AVERAGE = {"window_key": "averages_window_s"}  # Sun's numbers are 5–10 s means
 
-# Sun et al. 2007 central jet: the published values of both readings of its inflow (tsuji-jet, tsuji-jet-closed)
+# Sun et al. 2007 central jet: the published values of both readings of its inflow (tsuji-jet, tsuji-jet-background)
 _SUN_JET = (
     PublishedValue("bulk coordination number", "about 1.2", "Sun et al. 2007 Fig 5, central jet",
                    summary_key="coordination_number_avg", **_SUN_AVERAGE),
@@ -138,12 +138,12 @@ PUBLISHED: dict[str, tuple[PublishedValue, ...]] = {
                        others=("simulated bubble larger than the experiment's, with satellite bubbles ahead of it",),
                        **_BUBBLE_KEYS),
     ),
-    # Sun et al. 2007 (soft spheres, 2D, one layer): the built-in cases tsuji-jet (and tsuji-jet-closed, the
-    # same bed with the bottom closed but for the jet) and goldschmidt.
+    # Sun et al. 2007 (soft spheres, 2D, one layer): the built-in cases tsuji-jet (and tsuji-jet-background, the
+    # same bed with the rest of the bottom at u_mf) and goldschmidt.
     # Sun's numbers are means over 5-10 s; summary.json holds this run's means over that window
     # (or over the second half of a shorter run, which the table says).
     "tsuji-jet": _SUN_JET,
-    "tsuji-jet-closed": _SUN_JET,
+    "tsuji-jet-background": _SUN_JET,
     "goldschmidt": (
         PublishedValue("mean particle height", "8.9 cm (TF-DEM, cell-averaged drag)",
                        "Sun et al. 2007 Fig 9, uniform inflow, 5–10 s",

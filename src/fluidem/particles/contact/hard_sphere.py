@@ -16,8 +16,9 @@ the wrong picture. The default 1e-5 s is the Hertzian contact time of mm-sized g
 aluminium spheres at impact speeds of about 1 m/s (10–40 µs from 1 down to 0.01 m/s).
 Hoomans 1996 used no remedy; ``collapse_time = 0`` reproduces that.
 
-Why the remedy is on by default. Under Hoomans' force step, gravity is added as an
-impulse g DT every DT (eqs 33–34). In a resting bed that impulse reaches the floor
+Why the remedy is on by default. Under either force step (``particles.force_step``: the two
+give the same trajectories under gravity), gravity is added as impulses, g DT every DT (eqs
+33–34). In a resting bed that impulse reaches the floor
 through a cascade of collisions microseconds or less apart, and without the remedy
 dense frictional beds collapse. Measured:
 

@@ -11,6 +11,7 @@ the end of each chunk, not every step in it.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
@@ -84,81 +85,71 @@ class RunFailure(FloatingPointError):
 
 
 # ================================================================ the checks on arrays
-def first_non_finite(*arrays: np.ndarray) -> int:
-    """The first row (particle) with a NaN or infinite value in any of the (N, …) ``arrays``; −1 if none."""
-    bad = None
-    for a in arrays:
-        rows = ~np.isfinite(a).reshape(a.shape[0], -1).all(axis=1)
-        bad = rows if bad is None else bad | rows
-    if bad is None or not bad.any():
-        return -1
-    return int(np.argmax(bad))
+class Scan(NamedTuple):
+    """What one pass over the particles found (``_checks_kernels.particle_scan``; its docstring has the units).
 
-
-def wall_gaps(position: np.ndarray, wall_point: np.ndarray, wall_normal: np.ndarray) -> np.ndarray:
-    """(N, W) signed distance of each centre from each wall plane along its inward normal [m] (< 0: behind)."""
-    return position @ wall_normal.T - np.einsum("wk,wk->w", wall_point, wall_normal)[None, :]
-
-
-def domain_excess(position: np.ndarray, radius: np.ndarray, margin: float, gaps: np.ndarray | None = None,
-                  lower=None, upper=None) -> tuple[int, float, int]:
-    """The particle furthest out of the domain: (index, excess [m], where), or (−1, 0, 0) if none is out.
-
-    A particle is out when its centre lies more than ``margin`` of its diameters behind a wall plane
-    (``gaps`` from ``wall_gaps``) or outside the box [``lower``, ``upper``] (3-vectors [m], ±inf or NaN: no
-    bound on that side). ``excess`` is how far beyond that limit the centre is (> 0); ``where`` is the wall
-    index (>= 0), or −1 − (2 axis + side) for a bound of the box (side 0 lower, 1 upper).
+    first_bad: the first particle with a non-finite position, velocity or spin (−1: none). kinetic: the
+    kinetic energy with rotation [J]. excess: how far the centre furthest out of the domain lies beyond its
+    limit [m] (> 0: out), excess_i its particle, excess_where the wall index (>= 0) or −1 − (2 axis + side)
+    for a bound of the box (side 0 lower, 1 upper). wall_rel: the deepest particle–wall overlap over the
+    particle's diameter (−inf without walls), wall_i, wall_w its particle and wall. height_lo, height_hi: the
+    particles' range along ``up`` [m]. mass_total [kg].
     """
-    limit = margin * 2.0 * radius  # (N,)
-    best, best_excess, best_where = -1, 0.0, 0
-    if gaps is not None and gaps.size:
-        beyond = -gaps - limit[:, None]  # > 0: further behind the plane than the margin
-        k = int(np.argmax(beyond))
-        i, w = divmod(k, gaps.shape[1])
-        if beyond[i, w] > 0.0:
-            best, best_excess, best_where = i, float(beyond[i, w]), w
-    for side, bound in ((0, lower), (1, upper)):
-        if bound is None:
-            continue
-        for axis in range(3):
-            b = float(bound[axis])
-            if not math.isfinite(b):
-                continue
-            beyond = (b - position[:, axis] if side == 0 else position[:, axis] - b) - limit
-            i = int(np.argmax(beyond))
-            if beyond[i] > 0.0 and beyond[i] > best_excess:
-                best, best_excess, best_where = i, float(beyond[i]), -1 - (2 * axis + side)
-    return best, best_excess, best_where
+
+    first_bad: int
+    kinetic: float
+    excess: float
+    excess_i: int
+    excess_where: int
+    wall_rel: float
+    wall_i: int
+    wall_w: int
+    height_lo: float
+    height_hi: float
+    mass_total: float
 
 
-def largest_overlap(position: np.ndarray, radius: np.ndarray, row_start: np.ndarray, partner: np.ndarray,
-                    gaps: np.ndarray | None = None) -> tuple[float, int, int, int]:
-    """The deepest overlap as a fraction of the smaller diameter: (fraction, i, j, wall).
+def scan(position: np.ndarray, radius: np.ndarray, *, velocity=None, omega=None, mass=None, inertia=None,
+         wall_point=None, wall_normal=None, lower=None, upper=None, up=None, margin: float = 1.0) -> Scan:
+    """One compiled pass over the particles for the checks (see ``Scan``); arrays left out are zeros (no
+    walls, no bounds, no gravity). A particle is out of the domain when its centre lies more than ``margin``
+    of its diameters behind a wall plane (``wall_point``, inward ``wall_normal``, (W, 3) [m]) or outside the
+    box [``lower``, ``upper``] ((3,) [m], ±inf: no bound on that side)."""
+    from ._checks_kernels import particle_scan
 
-    Pairs come from the contact list (``row_start``, ``partner``: CSR of the pairs that may touch);
-    particle–wall overlaps from ``gaps`` (``wall_gaps``), as a fraction of the particle's diameter.
-    ``j`` is the partner (−1 for a wall), ``wall`` the wall index (−1 for a pair); (0, −1, −1, −1) when nothing
-    overlaps.
-    """
+    n = position.shape[0]
+    zeros3, zeros = np.zeros((n, 3)), np.zeros(n)
+    no_walls = np.zeros((0, 3))
+    inf = np.full(3, math.inf)
+    out = particle_scan(position, zeros3 if velocity is None else velocity, zeros3 if omega is None else omega,
+                        radius, zeros if mass is None else mass, zeros if inertia is None else inertia,
+                        no_walls if wall_point is None else np.asarray(wall_point, float),
+                        no_walls if wall_normal is None else np.asarray(wall_normal, float),
+                        -inf if lower is None else np.asarray(lower, float),
+                        inf if upper is None else np.asarray(upper, float),
+                        np.zeros(3) if up is None else np.asarray(up, float), float(margin))
+    return Scan(*out)
+
+
+def largest_pair_overlap(position: np.ndarray, radius: np.ndarray, row_start: np.ndarray, partner: np.ndarray,
+                         locate_above: float = 0.0) -> tuple[float, int, int]:
+    """The deepest overlap of two particles as a fraction of the smaller diameter: (fraction, i, j);
+    (0, −1, −1) when no pair overlaps. The pairs are those of the contact list (``row_start``, ``partner``: CSR
+    of the pairs that may touch), in one compiled pass; the pair (i, j) is looked for only when the fraction
+    exceeds ``locate_above`` (else −1, −1)."""
     from .analysis._contacts_kernels import contact_counts
 
-    best = (0.0, -1, -1, -1)
-    if partner.shape[0]:
-        _, _, worst = contact_counts(position, radius, row_start, partner)  # compiled, one pass
-        if worst > 0.0:
-            i = np.repeat(np.arange(position.shape[0]), np.diff(row_start))
-            j = partner.astype(np.int64)
-            dist = np.linalg.norm(position[i] - position[j], axis=1)
-            rel = (radius[i] + radius[j] - dist) / (2.0 * np.minimum(radius[i], radius[j]))
-            k = int(np.argmax(rel))
-            best = (float(rel[k]), int(i[k]), int(j[k]), -1)
-    if gaps is not None and gaps.size:
-        rel = (radius[:, None] - gaps) / (2.0 * radius[:, None])
-        k = int(np.argmax(rel))
-        i, w = divmod(k, gaps.shape[1])
-        if rel[i, w] > best[0]:
-            best = (float(rel[i, w]), int(i), -1, int(w))
-    return best
+    if not partner.shape[0]:
+        return 0.0, -1, -1
+    _, _, worst = contact_counts(position, radius, row_start, partner)
+    if not worst > max(locate_above, 0.0):
+        return max(float(worst), 0.0), -1, -1
+    i = np.repeat(np.arange(position.shape[0]), np.diff(row_start))
+    j = partner.astype(np.int64)
+    dist = np.linalg.norm(position[i] - position[j], axis=1)
+    rel = (radius[i] + radius[j] - dist) / (2.0 * np.minimum(radius[i], radius[j]))
+    k = int(np.argmax(rel))
+    return float(rel[k]), int(i[k]), int(j[k])
 
 
 def kinetic_energies(mass, velocity, inertia, omega) -> np.ndarray:
@@ -212,6 +203,7 @@ class RunChecks:
             height = max(height, abs(float((walls.box_upper - walls.box_lower) @ self.up)))
         self.height = height
         self.wall_speed = _wall_speed(engine.wall_motion)
+        self.moving_walls = bool(np.any(engine.wall_motion[:, 0] != 0))
         st = engine.state
         self.initial_speed = float(np.sqrt(np.max(np.einsum("ij,ij->i", st.velocity, st.velocity)))) \
             if st.n and engine.steps == 0 else None
@@ -246,46 +238,49 @@ class RunChecks:
             self._gas_finite()
         if st.n == 0:
             return
-        k = first_non_finite(st.position, st.velocity, st.omega)
-        if k >= 0:
-            raise self._non_finite(k)
-        if self.settings.enabled:
-            gaps = None
-            if eng.wall_normal.shape[0]:
-                from .analysis.probes import wall_positions
-
-                point, normal = wall_positions(eng)
-                gaps = wall_gaps(st.position, point, normal)
-            i, excess, where = domain_excess(st.position, st.radius, self.settings.domain_margin, gaps,
-                                             self.lower, self.upper)
-            if i >= 0:
-                raise self._domain(i, excess, where, gaps)
+        on = self.settings.enabled
+        point, normal = self._walls() if on else (None, None)
+        sc = scan(st.position, st.radius, velocity=st.velocity, omega=st.omega, mass=st.mass, inertia=st.inertia,
+                  wall_point=point, wall_normal=normal, lower=self.lower if on else None,
+                  upper=self.upper if on else None, up=self.up, margin=self.settings.domain_margin)
+        if sc.first_bad >= 0:
+            raise self._non_finite(sc.first_bad)
+        if on:
+            if sc.excess > 0.0:
+                raise self._domain(sc)
             if eng.contact_forces:  # soft spheres; hard spheres collide without overlap
-                rel, i, j, w = largest_overlap(st.position, st.radius, eng.row_start, eng.partner, gaps)
+                rel, i, j = largest_pair_overlap(st.position, st.radius, eng.row_start, eng.partner,
+                                                 self.settings.max_overlap)
+                if sc.wall_rel > rel:
+                    rel, i, j = sc.wall_rel, sc.wall_i, -1
                 if rel > self.settings.max_overlap:
-                    raise self._overlap(rel, i, j, w)
-            ke = kinetic_energies(st.mass, st.velocity, st.inertia, st.omega)
-            total = float(np.sum(ke))
-            supply = self._supply()
-            if kinetic_energy_jumped(total, self._ke_before, supply, self.settings.kinetic_energy_jump):
-                raise self._energy(total, supply, ke)
+                    raise self._overlap(rel, i, j, sc.wall_w)
+            supply = self._supply(sc)
+            if kinetic_energy_jumped(sc.kinetic, self._ke_before, supply, self.settings.kinetic_energy_jump):
+                raise self._energy(sc.kinetic, supply)
             if remember:
-                self._ke_before = total
+                self._ke_before = sc.kinetic
         if remember:
             self._t_before = eng.time
 
-    def _supply(self) -> float:
-        """``energy_supply`` of the particles now: their height span or the domain's, gas and wall speeds."""
-        st = self.engine.state
-        height = self.height
-        if self.gravity > 0.0:
-            h = st.position @ self.up
-            height = max(height, float(h.max() - h.min()))
+    def _walls(self) -> tuple[np.ndarray, np.ndarray]:
+        """(points (W, 3) at the engine's time, normals (W, 3)) of the wall planes."""
+        from .particles._softsphere_kernels import walls_now
+
+        eng = self.engine
+        if not self.moving_walls:
+            return eng.wall_point0, eng.wall_normal
+        return np.ascontiguousarray(walls_now(eng.wall_motion, eng.wall_point0, eng.time)[:, :3]), eng.wall_normal
+
+    def _supply(self, sc: Scan) -> float:
+        """``energy_supply`` now: a fall through the larger of the domain's height and the particles' span,
+        at the largest of the gas and wall speeds, over the time since the last check."""
+        height = max(self.height, sc.height_hi - sc.height_lo) if self.gravity > 0.0 else 0.0
         speed = self.wall_speed
         if self.coupling is not None:
             gs = self.coupling.state
             speed = max(speed, float(np.abs(gs.u).max()), float(np.abs(gs.v).max()))
-        return energy_supply(float(np.sum(st.mass)), self.gravity, height, speed, self.engine.time - self._t_before)
+        return energy_supply(sc.mass_total, self.gravity, height, speed, self.engine.time - self._t_before)
 
     # ------------------------------------------------------------ failures
     def _failure(self, check, message, hint, k=None, **kw) -> RunFailure:
@@ -313,13 +308,14 @@ class RunChecks:
         hints += self._cause_hints(None)
         return self._failure("non_finite", message, "; ".join(hints), k)
 
-    def _domain(self, k, excess, where, gaps) -> RunFailure:
+    def _domain(self, sc: Scan) -> RunFailure:
         st = self.engine.state
+        k, excess, where = sc.excess_i, sc.excess, sc.excess_where
         d = 2.0 * float(st.radius[k])
         margin = self.settings.domain_margin
         if where >= 0:
             name = self.engine.walls.names[where]
-            beyond = float(-gaps[k, where])
+            beyond = excess + margin * d
             message = (f"particle {int(st.ids[k])} at {self._where(k)}, moving at {self._speed(k):.4g} m/s, is "
                        f"{beyond:.4g} m beyond wall {name!r} "
                        f"(limit: checks.domain_margin = {margin:g} diameter(s), {margin * d:.4g} m)")
@@ -354,9 +350,9 @@ class RunChecks:
         hints += self._cause_hints(i)
         return self._failure("overlap", message, "; ".join(hints), i, value=rel, limit=limit)
 
-    def _energy(self, total, supply, ke) -> RunFailure:
-        k = int(np.argmax(ke))
+    def _energy(self, total, supply) -> RunFailure:
         st = self.engine.state
+        k = int(np.argmax(kinetic_energies(st.mass, st.velocity, st.inertia, st.omega)))
         factor = self.settings.kinetic_energy_jump
         before = self._ke_before
         message = (f"the particles' kinetic energy rose from {before:.4g} J at t = {self._t_before:.6g} s to "
@@ -376,7 +372,7 @@ class RunChecks:
         gs = self.coupling.state
         for name in ("p", "u", "v"):
             a = getattr(gs, name)
-            if not np.isfinite(a).all():
+            if not math.isfinite(float(np.sum(a))):  # one pass; a sum of finite fields this small stays finite
                 cell = np.unravel_index(int(np.argmax(~np.isfinite(a))), a.shape)
                 message = f"gas field {name} is not finite (first at index {tuple(int(c) for c in cell)})"
                 raise self._gas(message)

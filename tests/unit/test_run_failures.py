@@ -320,43 +320,54 @@ def test_the_checks_section_is_validated(tmp_path, capsys):
 
 
 # ====================================================================== the check functions on hand-made states
-def test_first_non_finite_names_the_first_bad_row():
-    a = np.zeros((4, 3))
-    b = np.zeros((4, 3))
-    assert C.first_non_finite(a, b) == -1
-    b[2, 1] = np.inf
-    a[3, 0] = np.nan
-    assert C.first_non_finite(a, b) == 2
+def test_scan_finds_the_first_non_finite_particle_and_leaves_it_out():
+    pos = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [3.0, 0.0, 0.0]])
+    vel = np.zeros((4, 3))
+    radius, mass = np.full(4, 0.25), np.full(4, 2.0)
+    assert C.scan(pos, radius, velocity=vel, mass=mass).first_bad == -1
+    vel[2, 1] = np.inf
+    pos[3, 0] = np.nan
+    vel[0, 0] = 1.0
+    sc = C.scan(pos, radius, velocity=vel, mass=mass)
+    assert sc.first_bad == 2
+    assert sc.kinetic == 1.0 and sc.mass_total == 8.0  # particles 2 and 3 left out of the energy, not the mass
+    omega = np.zeros((4, 3))
+    omega[1, 2] = np.nan
+    assert C.scan(pos, radius, velocity=np.zeros((4, 3)), omega=omega).first_bad == 1
 
 
 def test_domain_exactly_at_the_margin_passes_and_just_beyond_fails():
     # a floor y = 0 (normal +y) and a wall x = 1 (normal −x); diameter 0.5, margin 1 diameter: limit 0.5 m
-    point = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
-    normal = np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
+    walls = dict(wall_point=np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]),
+                 wall_normal=np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]]))
     radius = np.array([0.25, 0.25])
     pos = np.array([[0.5, -0.5, 0.0], [1.5, 0.5, 0.0]])  # both exactly one diameter behind a wall
-    gaps = C.wall_gaps(pos, point, normal)
-    assert C.domain_excess(pos, radius, 1.0, gaps) == (-1, 0.0, 0)
+    sc = C.scan(pos, radius, margin=1.0, **walls)
+    assert (sc.excess, sc.excess_i) == (0.0, -1)
     pos[1, 0] = np.nextafter(1.5, 2.0)
-    k, excess, where = C.domain_excess(pos, radius, 1.0, C.wall_gaps(pos, point, normal))
-    assert (k, where) == (1, 1) and 0.0 < excess < 1e-15
+    sc = C.scan(pos, radius, margin=1.0, **walls)
+    assert (sc.excess_i, sc.excess_where) == (1, 1) and 0.0 < sc.excess < 1e-15
     pos[0, 1] = -0.75  # further out than particle 1: the worst is reported
-    assert C.domain_excess(pos, radius, 1.0, C.wall_gaps(pos, point, normal))[:2] == (0, 0.25)
+    sc = C.scan(pos, radius, margin=1.0, **walls)
+    assert (sc.excess_i, sc.excess, sc.excess_where) == (0, 0.25, 0)
     # margin 0: the centre may reach the plane, not pass it
-    assert C.domain_excess(np.array([[0.5, 0.0, 0.0]]), radius[:1], 0.0, C.wall_gaps(
-        np.array([[0.5, 0.0, 0.0]]), point, normal))[0] == -1
+    assert C.scan(np.array([[0.5, 0.0, 0.0]]), radius[:1], margin=0.0, **walls).excess_i == -1
+    assert C.scan(np.array([[0.5, -1e-12, 0.0]]), radius[:1], margin=0.0, **walls).excess_i == 0
 
 
 def test_domain_of_a_box_of_bounds():
     # the gas grid [0, 1] x [0, 2], no bound along z; diameter 0.25, margin 2 diameters: limit 0.5 m
-    lower, upper = np.array([0.0, 0.0, -np.inf]), np.array([1.0, 2.0, np.inf])
+    box = dict(lower=np.array([0.0, 0.0, -np.inf]), upper=np.array([1.0, 2.0, np.inf]), margin=2.0)
     radius = np.array([0.125, 0.125])
     pos = np.array([[-0.5, 1.0, 1e9], [0.5, 2.5, 0.0]])  # exactly at the limit (left, top)
-    assert C.domain_excess(pos, radius, 2.0, None, lower, upper)[0] == -1
+    assert C.scan(pos, radius, **box).excess_i == -1
     pos[1, 1] = 2.625
-    k, excess, where = C.domain_excess(pos, radius, 2.0, None, lower, upper)
-    assert (k, excess) == (1, 0.125)
-    assert where == -1 - (2 * 1 + 1)  # y, upper side
+    sc = C.scan(pos, radius, **box)
+    assert (sc.excess_i, sc.excess) == (1, 0.125)
+    assert sc.excess_where == -1 - (2 * 1 + 1)  # y, upper side
+    pos[0, 0] = -1.0
+    sc = C.scan(pos, radius, **box)
+    assert (sc.excess_i, sc.excess, sc.excess_where) == (0, 0.5, -1)  # x, lower side
 
 
 def test_largest_overlap_of_pairs_and_walls():
@@ -364,19 +375,25 @@ def test_largest_overlap_of_pairs_and_walls():
     pos = np.array([[0.0, 10.0, 0.0], [0.75, 10.0, 0.0], [5.0, 0.125, 0.0]])
     row_start = np.array([0, 2, 2, 2])
     partner = np.array([1, 2], dtype=np.int32)  # pairs (0, 1) touching and (0, 2) apart
-    rel, i, j, w = C.largest_overlap(pos, radius, row_start, partner)
-    assert (rel, i, j, w) == (0.25, 0, 1, -1)  # 0.25 m of the smaller diameter 1 m
-    # a floor y = 0: particle 2 (diameter 0.5) overlaps it by 0.125 m, 0.25 of its diameter: not more than the pair
-    point, normal = np.zeros((1, 3)), np.array([[0.0, 1.0, 0.0]])
-    gaps = C.wall_gaps(pos, point, normal)
-    assert C.largest_overlap(pos, radius, row_start, partner, gaps) == (0.25, 0, 1, -1)
+    assert C.largest_pair_overlap(pos, radius, row_start, partner) == (0.25, 0, 1)  # 0.25 m of 1 m
+    # a floor y = 0: particle 2 (diameter 0.5) overlaps it by 0.125 m, 0.25 of its diameter
+    floor = dict(wall_point=np.zeros((1, 3)), wall_normal=np.array([[0.0, 1.0, 0.0]]))
+    sc = C.scan(pos, radius, **floor)
+    assert (sc.wall_rel, sc.wall_i, sc.wall_w) == (0.25, 2, 0)
     pos[2, 1] = 0.0  # now by 0.25 m, half its diameter
-    gaps = C.wall_gaps(pos, point, normal)
-    assert C.largest_overlap(pos, radius, row_start, partner, gaps) == (0.5, 2, -1, 0)
+    assert C.scan(pos, radius, **floor).wall_rel == 0.5
     # nothing touches
     pos[1, 0] = 2.0
     pos[2, 1] = 1.0
-    assert C.largest_overlap(pos, radius, row_start, partner, C.wall_gaps(pos, point, normal))[0] <= 0.0
+    assert C.largest_pair_overlap(pos, radius, row_start, partner) == (0.0, -1, -1)
+    assert C.scan(pos, radius, **floor).wall_rel < 0.0
+    assert C.scan(pos, radius).wall_rel == -np.inf  # no walls
+
+
+def test_scan_measures_the_height_span_along_up():
+    pos = np.array([[0.0, 1.0, 5.0], [0.0, -2.0, 7.0]])
+    sc = C.scan(pos, np.full(2, 0.1), up=np.array([0.0, 1.0, 0.0]))
+    assert (sc.height_lo, sc.height_hi) == (-2.0, 1.0)
 
 
 def test_kinetic_energy_jump_at_the_factor_passes_and_above_fails():
@@ -396,15 +413,16 @@ def test_energy_supply_covers_a_fall_and_the_gas_speed():
 
 
 def test_kinetic_energies_count_rotation():
-    ke = C.kinetic_energies(np.array([2.0]), np.array([[3.0, 0.0, 4.0]]), np.array([0.5]),
-                            np.array([[0.0, 0.0, 2.0]]))
-    assert ke == pytest.approx([25.0 + 1.0])
+    args = (np.array([2.0]), np.array([[3.0, 0.0, 4.0]]), np.array([0.5]), np.array([[0.0, 0.0, 2.0]]))
+    assert C.kinetic_energies(*args) == pytest.approx([25.0 + 1.0])
+    m, v, inertia, w = args
+    assert C.scan(np.zeros((1, 3)), np.array([0.1]), velocity=v, mass=m, inertia=inertia, omega=w).kinetic == 26.0
 
 
 # ====================================================================== RunChecks on small engines
 def test_overlap_exactly_at_the_limit_passes_and_just_above_fails(two_particles):
     eng = two_particles(overlap=0.3 * DIAMETER)
-    rel = C.largest_overlap(eng.state.position, eng.state.radius, eng.row_start, eng.partner)[0]
+    rel = C.largest_pair_overlap(eng.state.position, eng.state.radius, eng.row_start, eng.partner)[0]
     assert rel == pytest.approx(0.3, rel=1e-9)
     checks = RunChecks(ChecksSection(max_overlap=rel), eng)
     checks.start()

@@ -323,13 +323,12 @@ class RunChecks:
             axis, side = divmod(-1 - where, 2)
             names = (("left", "right"), ("bottom", "top"), ("back", "front"))
             message = (f"particle {int(st.ids[k])} at {self._where(k)}, moving at {self._speed(k):.4g} m/s, left "
-                       f"the gas grid through its "
-                       f"{names[axis][side]} side by {excess + margin * d:.4g} m (limit: checks.domain_margin = "
+                       f"the gas grid through its {names[axis][side]} side by {excess + margin * d:.4g} m (limit: checks.domain_margin = "
                        f"{margin:g} diameter(s), {margin * d:.4g} m)")
         tc = getattr(self.engine, "contact_time", None)
         tc = f"; contact time {tc:.4g} s" if tc else ""
-        hints = [f"the contacts (particles.contact, particles.wall_contact{tc}) must stop a particle at a wall within "
-                 "a few steps: they are too soft, or the time step too long, for its speed"]
+        hints = [(f"the contacts (particles.contact, particles.wall_contact{tc}) must stop a particle at a wall "
+                  "within a few steps: they are too soft, or the time step too long, for its speed")]
         hints += self._cause_hints(k)
         return self._failure("domain", message, "; ".join(hints), k, value=excess + margin * d, limit=margin * d)
 
@@ -340,9 +339,9 @@ class RunChecks:
                  f"wall {self.engine.walls.names[w]!r} by {rel:.4g} of its diameter")
         message = f"particle {int(st.ids[i])} at {self._where(i)} overlaps {other} (limit: checks.max_overlap = {limit:g})"
         speed = self._speed(i) if j < 0 else float(np.linalg.norm(st.velocity[i] - st.velocity[j]))
-        hints = [f"the contacts are too soft for the loads and impact speeds (relative speed now {speed:.4g} m/s): "
-                 "raise particles.contact.stiffness (youngs_modulus for Hertz laws; particles.wall_contact for "
-                 "walls)"]
+        hints = [(f"the contacts are too soft for the loads and impact speeds (relative speed now {speed:.4g} m/s): "
+                  "raise particles.contact.stiffness (youngs_modulus for Hertz laws; particles.wall_contact for "
+                  "walls)")]
         model = getattr(self.engine.case.particles.contact, "model", "")
         if "hertz" in model:
             hints.append(f"the Hertz time step is set for time.impact_velocity = "
@@ -362,8 +361,8 @@ class RunChecks:
         dt = self.engine.dt
         tc = getattr(self.engine, "contact_time", None)
         steps = f" ({tc / dt:.3g} steps per contact time)" if tc else ""
-        hints = [f"energy from nowhere is a numerical instability: the time step dt = {dt:.4g} s is too long for "
-                 f"the contacts{steps}; leave time.dt unset (time.dt_fraction × contact time) or lower it"]
+        hints = [(f"energy from nowhere is a numerical instability: the time step dt = {dt:.4g} s is too long for "
+                  f"the contacts{steps}; leave time.dt unset (time.dt_fraction × contact time) or lower it")]
         hints += self._cause_hints(k)
         return self._failure("kinetic_energy", message, "; ".join(hints), k, value=total,
                              limit=factor * max(before, supply))
@@ -379,8 +378,8 @@ class RunChecks:
 
     def _gas(self, message: str) -> RunFailure:
         st = self.engine.state
-        hints = [f"the gas time step gas.dt = {self.coupling.gas_dt:g} s must keep the Courant number below 1 "
-                 "(0.5 with TVD convection): lower gas.dt or the inflow velocities"]
+        hints = [(f"the gas time step gas.dt = {self.coupling.gas_dt:g} s must keep the Courant number below 1 "
+                  "(0.5 with TVD convection): lower gas.dt or the inflow velocities")]
         k = None
         if st.n:
             v2 = np.einsum("ij,ij->i", st.velocity, st.velocity)

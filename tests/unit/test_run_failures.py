@@ -302,7 +302,7 @@ def test_failed_run_from_a_real_process_has_no_traceback(tmp_path):
                PYTHONPATH=os.pathsep.join([src, *filter(None, [os.environ.get("PYTHONPATH")])]))
     p = subprocess.run([sys.executable, "-m", "fluidem", "run", "pour", "--until", "0.01", "--out", str(out),
                         "--set", "particles.placement.velocity=[1e6, 0.0, 0.0]", "--quiet"], env=env,
-                       capture_output=True, text=True, timeout=600, cwd=tmp_path)
+                       capture_output=True, text=True, timeout=600, cwd=tmp_path, check=False)
     assert p.returncode == 1
     assert p.stdout == ""
     lines = p.stderr.strip().splitlines()
@@ -338,8 +338,8 @@ def test_scan_finds_the_first_non_finite_particle_and_leaves_it_out():
 
 def test_domain_exactly_at_the_margin_passes_and_just_beyond_fails():
     # a floor y = 0 (normal +y) and a wall x = 1 (normal −x); diameter 0.5, margin 1 diameter: limit 0.5 m
-    walls = dict(wall_point=np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]),
-                 wall_normal=np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]]))
+    walls = {"wall_point": np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]),
+             "wall_normal": np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])}
     radius = np.array([0.25, 0.25])
     pos = np.array([[0.5, -0.5, 0.0], [1.5, 0.5, 0.0]])  # both exactly one diameter behind a wall
     sc = C.scan(pos, radius, margin=1.0, **walls)
@@ -357,7 +357,7 @@ def test_domain_exactly_at_the_margin_passes_and_just_beyond_fails():
 
 def test_domain_of_a_box_of_bounds():
     # the gas grid [0, 1] x [0, 2], no bound along z; diameter 0.25, margin 2 diameters: limit 0.5 m
-    box = dict(lower=np.array([0.0, 0.0, -np.inf]), upper=np.array([1.0, 2.0, np.inf]), margin=2.0)
+    box = {"lower": np.array([0.0, 0.0, -np.inf]), "upper": np.array([1.0, 2.0, np.inf]), "margin": 2.0}
     radius = np.array([0.125, 0.125])
     pos = np.array([[-0.5, 1.0, 1e9], [0.5, 2.5, 0.0]])  # exactly at the limit (left, top)
     assert C.scan(pos, radius, **box).excess_i == -1
@@ -377,7 +377,7 @@ def test_largest_overlap_of_pairs_and_walls():
     partner = np.array([1, 2], dtype=np.int32)  # pairs (0, 1) touching and (0, 2) apart
     assert C.largest_pair_overlap(pos, radius, row_start, partner) == (0.25, 0, 1)  # 0.25 m of 1 m
     # a floor y = 0: particle 2 (diameter 0.5) overlaps it by 0.125 m, 0.25 of its diameter
-    floor = dict(wall_point=np.zeros((1, 3)), wall_normal=np.array([[0.0, 1.0, 0.0]]))
+    floor = {"wall_point": np.zeros((1, 3)), "wall_normal": np.array([[0.0, 1.0, 0.0]])}
     sc = C.scan(pos, radius, **floor)
     assert (sc.wall_rel, sc.wall_i, sc.wall_w) == (0.25, 2, 0)
     pos[2, 1] = 0.0  # now by 0.25 m, half its diameter

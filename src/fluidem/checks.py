@@ -16,8 +16,12 @@ from typing import NamedTuple
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
+from ._checks_kernels import particle_scan
+
 EARTH_GRAVITY = 9.81  # [m/s^2], the scale against which a case's gravity is called large in a hint
 MOVING_FAST = 0.05  # a particle moving more than this many diameters per step is named in a hint [-]
+_NO_WALLS = np.zeros((0, 3))
+_NO_LOWER, _NO_UPPER = np.full(3, -math.inf), np.full(3, math.inf)
 
 
 class ChecksSection(BaseModel):
@@ -115,8 +119,6 @@ def scan(position: np.ndarray, radius: np.ndarray, *, velocity=None, omega=None,
     walls, no bounds, no gravity). A particle is out of the domain when its centre lies more than ``margin``
     of its diameters behind a wall plane (``wall_point``, inward ``wall_normal``, (W, 3) [m]) or outside the
     box [``lower``, ``upper``] ((3,) [m], ±inf: no bound on that side)."""
-    from ._checks_kernels import particle_scan
-
     n = position.shape[0]
     zeros3, zeros = np.zeros((n, 3)), np.zeros(n)
     no_walls = np.zeros((0, 3))
@@ -191,6 +193,7 @@ class RunChecks:
         self.up = -engine.gravity / self.gravity if self.gravity > 0 else np.zeros(3)
         # bounds of the box: the gas grid of a coupled run (its non-periodic axes)
         self.lower = self.upper = None
+        self._gas_speed = 0.0  # the largest gas speed at the last check [m/s]
         height = 0.0
         if coupling is not None:
             gd = coupling.grid
@@ -202,6 +205,8 @@ class RunChecks:
         if walls.box_lower is not None:
             height = max(height, abs(float((walls.box_upper - walls.box_lower) @ self.up)))
         self.height = height
+        self._lower = _NO_LOWER if self.lower is None else np.ascontiguousarray(self.lower, dtype=float)
+        self._upper = _NO_UPPER if self.upper is None else np.ascontiguousarray(self.upper, dtype=float)
         self.wall_speed = _wall_speed(engine.wall_motion)
         self.moving_walls = bool(np.any(engine.wall_motion[:, 0] != 0))
         st = engine.state
@@ -239,10 +244,10 @@ class RunChecks:
         if st.n == 0:
             return
         on = self.settings.enabled
-        point, normal = self._walls() if on else (None, None)
-        sc = scan(st.position, st.radius, velocity=st.velocity, omega=st.omega, mass=st.mass, inertia=st.inertia,
-                  wall_point=point, wall_normal=normal, lower=self.lower if on else None,
-                  upper=self.upper if on else None, up=self.up, margin=self.settings.domain_margin)
+        point, normal = self._walls() if on else (_NO_WALLS, _NO_WALLS)
+        lower, upper = (self._lower, self._upper) if on else (_NO_LOWER, _NO_UPPER)
+        sc = Scan(*particle_scan(st.position, st.velocity, st.omega, st.radius, st.mass, st.inertia, point, normal,
+                                 lower, upper, self.up, self.settings.domain_margin))
         if sc.first_bad >= 0:
             raise self._non_finite(sc.first_bad)
         if on:
@@ -276,10 +281,7 @@ class RunChecks:
         """``energy_supply`` now: a fall through the larger of the domain's height and the particles' span,
         at the largest of the gas and wall speeds, over the time since the last check."""
         height = max(self.height, sc.height_hi - sc.height_lo) if self.gravity > 0.0 else 0.0
-        speed = self.wall_speed
-        if self.coupling is not None:
-            gs = self.coupling.state
-            speed = max(speed, float(np.abs(gs.u).max()), float(np.abs(gs.v).max()))
+        speed = max(self.wall_speed, self._gas_speed)
         return energy_supply(sc.mass_total, self.gravity, height, speed, self.engine.time - self._t_before)
 
     # ------------------------------------------------------------ failures
@@ -368,10 +370,13 @@ class RunChecks:
                              limit=factor * max(before, supply))
 
     def _gas_finite(self) -> None:
+        """Raise if a gas field is not finite; keep the largest gas speed (``_gas_speed``) [m/s]."""
         gs = self.coupling.state
-        for name in ("p", "u", "v"):
-            a = getattr(gs, name)
-            if not math.isfinite(float(np.sum(a))):  # one pass; a sum of finite fields this small stays finite
+        u, v = float(np.abs(gs.u).max()), float(np.abs(gs.v).max())
+        self._gas_speed = max(u, v)
+        for name, value in (("p", float(np.sum(gs.p))), ("u", u), ("v", v)):  # NaN and inf carry to the sum, max
+            if not math.isfinite(value):
+                a = getattr(gs, name)
                 cell = np.unravel_index(int(np.argmax(~np.isfinite(a))), a.shape)
                 message = f"gas field {name} is not finite (first at index {tuple(int(c) for c in cell)})"
                 raise self._gas(message)

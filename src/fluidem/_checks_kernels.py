@@ -35,18 +35,17 @@ def particle_scan(position, velocity, omega, radius, mass, inertia, wall_point, 
     mass_total = 0.0
     for i in range(n):
         mass_total += mass[i]
-        finite = True
-        for k in range(3):
-            if not (math.isfinite(position[i, k]) and math.isfinite(velocity[i, k]) and math.isfinite(omega[i, k])):
-                finite = False
-        if not finite:
+        px, py, pz = position[i, 0], position[i, 1], position[i, 2]
+        vx, vy, vz = velocity[i, 0], velocity[i, 1], velocity[i, 2]
+        wx, wy, wz = omega[i, 0], omega[i, 1], omega[i, 2]
+        # one test: a NaN or an infinity carries to the sum (finite fields of a particle do not reach 1e308)
+        if not math.isfinite(px + py + pz + vx + vy + vz + wx + wy + wz):
             if first_bad < 0:
                 first_bad = i
             continue
-        px, py, pz = position[i, 0], position[i, 1], position[i, 2]
-        kinetic += 0.5 * (mass[i] * (velocity[i, 0] ** 2 + velocity[i, 1] ** 2 + velocity[i, 2] ** 2)
-                          + inertia[i] * (omega[i, 0] ** 2 + omega[i, 1] ** 2 + omega[i, 2] ** 2))
+        kinetic += 0.5 * (mass[i] * (vx * vx + vy * vy + vz * vz) + inertia[i] * (wx * wx + wy * wy + wz * wz))
         d = 2.0 * radius[i]
+        inv_d = 1.0 / d
         limit = margin * d
         for w in range(nw):
             gap = ((px - wall_point[w, 0]) * wall_normal[w, 0] + (py - wall_point[w, 1]) * wall_normal[w, 1]
@@ -54,7 +53,7 @@ def particle_scan(position, velocity, omega, radius, mass, inertia, wall_point, 
             beyond = -gap - limit
             if beyond > excess:
                 excess, excess_i, excess_where = beyond, i, w
-            rel = (radius[i] - gap) / d
+            rel = (radius[i] - gap) * inv_d
             if rel > wall_rel:
                 wall_rel, wall_i, wall_w = rel, i, w
         for k in range(3):

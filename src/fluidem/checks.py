@@ -303,6 +303,7 @@ class RunChecks:
         st = self.engine.state
         what = [name for name, a in (("position", st.position), ("velocity", st.velocity), ("spin", st.omega))
                 if not np.isfinite(a[k]).all()]
+        what = what or ["sum of position, velocity and spin (values near the largest float)"]
         n = int(np.count_nonzero(~np.isfinite(st.position).all(axis=1) | ~np.isfinite(st.velocity).all(axis=1)))
         message = (f"particle {int(st.ids[k])} has a non-finite {' and '.join(what)} ({n} particle(s) with "
                    f"non-finite position or velocity) after a chunk that began at t = {self._t_before:.6g} s")

@@ -15,6 +15,7 @@ from typing import Annotated, Any, Literal, Union
 import tomli_w
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
+from .checks import ChecksSection
 from .coupling.schema import CouplingSection
 from .errors import CaseError
 from .gas.schema import GasSection
@@ -251,6 +252,7 @@ class Case(Strict):
     threads: int | None = Field(None, ge=1, description="compute threads; default one per 1200 particles, at most all cores")
     gas: GasSection | None = Field(None, description="gas phase; omit for a DEM-only run")
     coupling: CouplingSection | None = Field(None, description="gas–particle exchange; default with [gas]")
+    checks: ChecksSection = Field(default_factory=ChecksSection, description="health checks while the run steps")
 
     @model_validator(mode="after")
     def _defaults(self):

@@ -74,7 +74,7 @@ def cmd_run(args) -> int:
         log.warning("interrupted at t = %.6g s; checkpoint written. Continue with: fluidem run --resume %s",
                     sim.time, out)
         return 130
-    except FloatingPointError as err:
+    except FloatingPointError as err:  # a blow-up (checks.RunFailure): summary.json says why, the checkpoint is kept
         log.error("run failed: %s", err)
         return 1
     except OSError as err:

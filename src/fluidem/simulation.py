@@ -18,7 +18,9 @@ from .analysis import fluidised as F
 from .analysis import mixing as M
 from .analysis import probes as P
 from .case import Case, validate_case
+from .checks import RunChecks, RunFailure
 from .errors import CaseError, CheckpointError
+from .gas.solver import GasConvergenceError
 from .io.atomic import write_text_atomic
 from .io.gas_fields import GasFieldWriter
 from .io.probes_csv import ProbeWriter
@@ -26,6 +28,7 @@ from .io.restart import CHECKPOINT_NAMES, PREVIOUS_RESTART_NAME, RESTART_NAME, l
 from .io.summary import finite, summary_json
 from .io.snapshots import ParticleWriter
 from .particles import engine_for
+from .particles.hardsphere import CollisionCascadeError
 from .schedule import EveryTime
 from .state import ParticleState
 
@@ -56,9 +59,11 @@ class Checkpointer:
     def __init__(self, out_dir: Path, schedule):
         self.path = Path(out_dir) / RESTART_NAME
         self.schedule = schedule
+        self.last_time: float | None = None  # simulated time of the checkpoint this object last wrote [s]
 
     def __call__(self, sim) -> None:
         sim.save_checkpoint(self.path)
+        self.last_time = sim.time
 
 
 class Progress:
@@ -117,6 +122,7 @@ class Simulation:
             # the engine's total energy at t = 0 where it books it (hard spheres: Hoomans 1996 eq. 51's balance)
             self.energy0 = self.engine.bookkeeping().get("total_energy_J")
             self.gas = self._gas_coupling(self.engine)
+        self.checks = RunChecks(case.checks, self.engine, self.gas)  # between chunks, before the observers
         self.observers: dict = {}
         self.progress = Progress(case.output.progress_interval) if progress else None
         self.status = "created"
@@ -339,6 +345,7 @@ class Simulation:
                 obs(self)
             self.output_seconds += _time.perf_counter() - t0
         chunk = 64
+        self.checks.start()
         self.status = "running"
         self._stop_requested = False
         handlers = self._install_signal_handlers()
@@ -350,7 +357,12 @@ class Simulation:
                 t0 = _time.perf_counter()
                 engine0 = self.gas.engine_seconds if self.gas is not None else 0.0
                 n = stop - self.steps
-                self.advance(n)
+                try:
+                    self.advance(n)  # GasConvergenceError, CollisionCascadeError: handled below as a failure
+                except ValueError as err:  # the gas exchange refused the particles (e.g. out of the grid)
+                    if self.gas is None:
+                        raise
+                    raise self.checks.from_error(err) from None
                 if self.startup_s is None:
                     self.startup_s = seconds_since_process_start()
                 self._run_particle_steps += n * self.engine.state.n
@@ -364,6 +376,7 @@ class Simulation:
                 # aim for CHUNK_WALL_SECONDS per compiled call
                 if spent > 0:
                     chunk = int(min(max(1, n * CHUNK_WALL_SECONDS / spent), 4 * chunk + 1))
+                self.checks()  # RunFailure; no observer (the checkpoint) sees a state that fails
                 self.wall_time = wall0 + _time.perf_counter() - self._run_wall_start
                 t0 = _time.perf_counter()
                 for k, obs in self.observers.items():
@@ -373,11 +386,15 @@ class Simulation:
                 self.output_seconds += _time.perf_counter() - t0
                 if self.progress is not None:
                     self.progress.maybe(self, until)
-                self._check_finite()
         except KeyboardInterrupt:
             self.status = "interrupted"
             self._finish(interrupted=True)
             raise
+        except (RunFailure, GasConvergenceError, CollisionCascadeError) as err:
+            failure = self.checks.from_error(err) if not isinstance(err, RunFailure) else err
+            self.wall_time = wall0 + _time.perf_counter() - self._run_wall_start
+            self._fail(failure)
+            raise failure from None
         except FloatingPointError as err:
             self.status = f"error: {err}"
             self._finish(interrupted=True)
@@ -423,11 +440,25 @@ class Simulation:
         for sig, h in (old or {}).items():
             signal.signal(sig, h)
 
-    def _check_finite(self) -> None:
-        st = self.engine.state
-        if not np.isfinite(st.position).all():
-            raise FloatingPointError(f"particle positions became non-finite at t = {self.time:.6g} s "
-                                     f"(time step too large or contact parameters too stiff?)")
+    def _fail(self, failure: RunFailure) -> None:
+        """End a run that blew up: status ``failed``, the failure in summary.json, the outputs written so far
+        kept and the last good checkpoint left as it is (the broken state is never written to it)."""
+        self.status = "failed"
+        ck = self.observers.get("checkpoint")
+        if ck is not None and ck.path.exists():
+            failure.checkpoint = (ck.path, ck.last_time if ck.last_time is not None else self._run_time_start)
+        self._summary_extra["failure"] = failure.record()
+        try:
+            with np.errstate(all="ignore"):  # figures of a broken state: NaN and inf become null
+                self._finish(interrupted=True, checkpoint=False)
+        except OSError:  # e.g. a full disk: the failure itself is what the caller must see
+            pass
+        except Exception:  # noqa: BLE001 - a figure the broken state cannot give; keep what says why it failed
+            if self.out_dir is not None:
+                minimal = {"case": self.case.name, "status": self.status, "sim_time_s": self.time,
+                           "wall_time_s": self.wall_time, "n_particles": self.engine.state.n, "steps": self.steps,
+                           "dt_s": self.dt, **self._summary_extra}
+                write_text_atomic(self.out_dir / "summary.json", summary_json(finite(minimal)))
 
     def _finish(self, interrupted: bool = False, checkpoint: bool = True) -> dict:
         if checkpoint and self.out_dir is not None and "checkpoint" in self.observers:
@@ -464,6 +495,7 @@ class Simulation:
             "threads": self.threads,
             "startup_s": self.startup_s,
             **self.time_split(),
+            "check_time_s": self.checks.seconds,  # the health checks of this process's runs (not over resumes)
             "coordination_number": c["coordination"],
             "max_overlap_rel": c["max_overlap_rel"],
             "kinetic_energy_J": e["kinetic_J"],

@@ -52,7 +52,8 @@ def surface_packing_fraction(engine, samples_per_diameter: int = 20) -> float:
     The area under the upper layer of particles is integrated along x: the free
     surface h(x) is the highest particle boundary above each x (sampled finely);
     the fraction is the particles' disc area over ∫ (h − y_floor) dx. The floor and
-    the side limits are the box walls (or the particles' extent without walls).
+    the side limits are the box walls (or the particles' extent without walls). NaN when no particle
+    lies above the floor between them.
     """
     st = engine.state
     if engine.walls.box_lower is not None:
@@ -69,4 +70,6 @@ def surface_packing_fraction(engine, samples_per_diameter: int = 20) -> float:
                    st.position[:, 1:2] + np.sqrt(np.maximum(st.radius[:, None] ** 2 - dx**2, 0.0)), y0)
     h = top.max(axis=0) - y0
     area = np.trapezoid(h, xs)
+    if not area > 0.0:  # no particle above the floor between the side limits (e.g. all fell out of the box)
+        return float("nan")
     return float(np.sum(np.pi * st.radius**2) / area)

@@ -408,8 +408,7 @@ class Simulation:
             signal.signal(sig, h)
 
     def _check_finite(self) -> None:
-        st = self.engine.state
-        if not np.isfinite(st.position).all():
+        if not self.engine.positions_finite():
             raise FloatingPointError(f"particle positions became non-finite at t = {self.time:.6g} s "
                                      f"(time step too large or contact parameters too stiff?)")
 
@@ -530,14 +529,18 @@ class Simulation:
             self.energy0 = float(scalars["energy0"])
 
     @classmethod
-    def resume(cls, out_dir: str | Path, progress: bool = False, threads: int | None = None) -> "Simulation":
-        """Continue the run in ``out_dir`` from its last checkpoint (optionally with another thread count)."""
+    def resume(cls, out_dir: str | Path, progress: bool = False, threads: int | None = None,
+               device: str | None = None) -> "Simulation":
+        """Continue the run in ``out_dir`` from its last checkpoint (optionally with another thread count, or on
+        another device: a checkpoint of either soft-sphere engine continues on the other)."""
         out_dir = Path(out_dir)
         if not (out_dir / "case.toml").exists():
             raise CaseError(f"--resume {out_dir}: not a run directory (no case.toml)")
         case = read_run_case(out_dir / "case.toml")
         if threads is not None:
             case.threads = threads
+        if device is not None:
+            case.device = device
         return cls(case, out_dir=out_dir, resume=True, progress=progress)
 
 

@@ -326,11 +326,10 @@ class SoftSphereGPUEngine(SoftSphereEngine):
         return cur["count"].copy_to_host(), cur["nbr"].copy_to_host(), cur["hist"].copy_to_host()
 
     def _half_list(self):
-        """(row_start, partner, hist): the pairs once each (the row of the smaller index), for the analyses."""
+        """(row_start, partner): the pairs once each (the row of the smaller index), for the analyses."""
         if self._list_cache is None:
-            count, nbr, fhist = self._host_list()
-            row_start, partner = upper_rows(count, nbr)
-            self._list_cache = (row_start, partner, half_history(row_start, partner, count, nbr, fhist))
+            cur = self._lists[0]
+            self._list_cache = upper_rows(cur["count"].copy_to_host(), cur["nbr"].copy_to_host())
         return self._list_cache
 
     @property
@@ -343,7 +342,9 @@ class SoftSphereGPUEngine(SoftSphereEngine):
 
     @property
     def hist(self) -> np.ndarray:
-        return self._half_list()[2]
+        """(P, 3) springs of the pairs of ``row_start``/``partner``, relative to the row's particle."""
+        row_start, partner = self._half_list()
+        return half_history(row_start, partner, *self._host_list())
 
     @property
     def ref_pos(self) -> np.ndarray:

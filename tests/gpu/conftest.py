@@ -35,18 +35,19 @@ LAWS = {
 
 
 def make_packing(model: str, n: int = 120, dimensions: int = 3, seed: int = 3, speed: float = 0.5,
-                 spin: float = 50.0, two_species: bool = True, moving_wall: bool = False, **time):
-    """(case, state): n spheres on a lattice of pitch 0.97 d (neighbours overlap by 3 %), jittered, in a box
-    whose walls cut into the outer layer; two sizes in two species with a per-pair override (the contact
+                 spin: float = 50.0, two_species: bool = True, moving_wall: bool = False, pitch: float = 0.97,
+                 margin: float = 0.48, **time):
+    """(case, state): n spheres on a lattice of ``pitch`` d (0.97: neighbours overlap by 3 %), jittered, in a
+    box ``margin`` d from the outer centres (0.48: the walls cut into the outer layer); two sizes in two species with a per-pair override (the contact
     tables are per species pair); gravity; random velocities [m/s] and spins [rad/s]."""
     rng = np.random.default_rng(seed)
-    pitch = 0.97 * DIAMETER
+    pitch = pitch * DIAMETER
     per = int(np.ceil(n ** (1.0 / dimensions)))
     idx = np.array(np.meshgrid(*[np.arange(per)] * dimensions, indexing="ij")).reshape(dimensions, -1).T[:n]
     pos = np.zeros((n, 3))
-    pos[:, :dimensions] = (idx + 0.5) * pitch + 0.48 * DIAMETER
+    pos[:, :dimensions] = (idx + 0.5) * pitch + margin * DIAMETER
     pos[:, :dimensions] += rng.uniform(-0.02, 0.02, (n, dimensions)) * DIAMETER
-    upper = pos.max(axis=0) + 0.48 * DIAMETER
+    upper = pos.max(axis=0) + margin * DIAMETER
     if dimensions == 2:
         pos[:, 2] = 0.5 * DIAMETER
         upper[2] = DIAMETER

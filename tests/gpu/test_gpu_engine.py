@@ -133,3 +133,30 @@ def test_state_fetched_and_sent_back(packing_case, clone):
     assert _close(cpu.state.velocity, gpu.state.velocity, 1e-9) < 1e-9
     assert np.all(gpu.state.velocity[:, 0] > cpu.state.velocity[:, 0] - 1e-9)
     assert gpu.positions_finite()
+
+
+def test_run_directory_of_a_gpu_run_resumes_on_the_cpu(packing_case, tmp_path):
+    """``Simulation`` with ``device = "gpu"``: its run directory (case.toml, restart.h5) resumes on the CPU
+    (``Simulation.resume(..., device="cpu")``, what ``fluidem run --resume DIR --device cpu`` does) and ends
+    where a CPU run of the same case ends."""
+    from fluidem.simulation import Simulation
+
+    case, state = packing_case("hertz_mindlin", n=27, speed=2.0, two_species=False, pitch=1.1, margin=0.6)
+    csv = tmp_path / "particles.csv"
+    table = np.column_stack([state.position, 2.0 * state.radius, state.velocity])
+    rows = [",".join(repr(float(v)) for v in row) for row in table]
+    csv.write_text("x,y,z,diameter,vx,vy,vz\n" + "\n".join(rows) + "\n")
+    steps = 40
+    case = case.with_overrides({"particles.placement": {"method": "file", "file": str(csv)},
+                                "time.end": steps * case.time.dt, "output.checkpoint_interval": 20 * case.time.dt,
+                                "output.snapshot_interval": 20 * case.time.dt})
+    whole = Simulation(case.with_overrides({"device": "cpu"}))
+    whole.run(until=steps * case.time.dt)
+    first = Simulation(case.with_overrides({"device": "gpu"}), out_dir=tmp_path / "run")
+    assert type(first.engine).__name__ == "SoftSphereGPUEngine"
+    first.run(until=20 * case.time.dt)
+    again = Simulation.resume(tmp_path / "run", device="cpu")
+    assert type(again.engine).__name__ == "SoftSphereEngine" and again.steps == 20
+    again.run()
+    assert again.steps == whole.steps == steps
+    assert _close(whole.state.position, again.state.position, POSITION_RTOL, 0.02) < POSITION_RTOL

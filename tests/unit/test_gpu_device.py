@@ -89,3 +89,19 @@ def test_gpu_engine_under_the_cuda_simulator():
     tail = "\n".join((r.stdout + r.stderr).strip().splitlines()[-40:])
     assert r.returncode == 0, tail
     assert " passed" in tail and "skipped" not in tail.splitlines()[-1], tail
+
+
+def test_gpu_kernels_compile_to_ptx():
+    """numba-cuda types and compiles every kernel for sm_90 (H100/H200) without a GPU, where numba-cuda, NVVM
+    and NVRTC are installed (``pip install numba-cuda nvidia-nvvm nvidia-cuda-nvrtc``); the simulator does
+    not check types. Run in a subprocess: numba-cuda replaces numba.cuda at Numba's import."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT / "src"))
+    env.pop("NUMBA_ENABLE_CUDASIM", None)
+    probe = subprocess.run([sys.executable, "-c", "import numba_cuda; from numba.cuda.cudadrv import nvvm; "
+                            "nvvm.NVVM()"], env=env, capture_output=True, text=True, timeout=120)
+    if probe.returncode != 0:
+        pytest.skip("numba-cuda with NVVM is not installed: " + ((probe.stderr.strip().splitlines() or ["?"])[-1]))
+    r = subprocess.run([sys.executable, str(ROOT / "tests" / "_helpers" / "gpu_ptx.py"), "9", "0"], env=env,
+                       capture_output=True, text=True, timeout=SIMULATOR_TIMEOUT)
+    assert r.returncode == 0, (r.stdout + r.stderr)[-3000:]
+    assert r.stdout.count("characters of PTX") == 8, r.stdout

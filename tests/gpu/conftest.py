@@ -4,7 +4,7 @@ That is on a machine with an NVIDIA GPU (``python3 -m pytest tests/gpu``: the ke
 the CUDA simulator (``NUMBA_ENABLE_CUDASIM=1`` set before Numba is imported: the kernels run as Python,
 thread by thread). The simulator must be chosen before Numba is imported, and the suite's own conftest
 imports it first, so in the ordinary ``python3 -m pytest`` run these tests are skipped in-process and
-``tests/unit/test_gpu_simulator.py`` runs this folder in a subprocess under the simulator.
+``tests/unit/test_gpu_device.py`` runs this folder in a subprocess under the simulator.
 
 Factories
 ---------
@@ -17,12 +17,8 @@ import numpy as np
 import pytest
 
 from fluidem.case import validate_case
-from fluidem.particles.softsphere_gpu import cuda_available
 from fluidem.state import ParticleState
 
-if not cuda_available():
-    pytest.skip("numba.cuda has no GPU or simulator in this process (tests/unit/test_gpu_simulator.py runs these "
-                "under NUMBA_ENABLE_CUDASIM=1)", allow_module_level=True)
 
 DIAMETER = 4e-3  # [m]
 DENSITY = 2500.0  # [kg/m^3]

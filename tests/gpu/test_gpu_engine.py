@@ -13,10 +13,13 @@ import numpy as np
 import pytest
 
 from fluidem.particles.softsphere import SoftSphereEngine
-from fluidem.particles.softsphere_gpu import SoftSphereGPUEngine
+from fluidem.particles.softsphere_gpu import SoftSphereGPUEngine, cuda_available
 
 FORCE_RTOL = 1e-12  # of the largest force or torque (module docstring)
 POSITION_RTOL = 1e-12  # of the box size
+
+pytestmark = pytest.mark.skipif(not cuda_available(), reason="numba.cuda has no GPU or simulator in this process "
+                                "(tests/unit/test_gpu_device.py runs these under NUMBA_ENABLE_CUDASIM=1)")
 
 
 def _gpu(case, state):

@@ -36,7 +36,12 @@ application configures logging (the ``fluidem`` command does).
 """
 import logging as _logging
 
-from ._numba_cache import install as _install_cache_stamp
+import numpy as _np
+
+if not hasattr(_np, "row_stack"):  # NumPy 2.5 dropped it; Numba's and numba-cuda's imports still name it
+    _np.row_stack = _np.vstack
+
+from ._numba_cache import install as _install_cache_stamp  # noqa: E402
 
 _logging.getLogger("fluidem").addHandler(_logging.NullHandler())
 

@@ -20,6 +20,8 @@ hard spheres The built-in ``hoomans-orifice`` case (Hoomans 1996 Table 2: 2400 h
             untimed (``hard_warmup``), then ``hard_until`` seconds of the 45 m/s jet are timed:
             collisions per second of the whole run and of the engine alone (the target: 2e6 per
             second on one core), collisions and milliseconds per step. The engine is serial.
+GPU         ``--device gpu``: the dense bed of 100,000, 1,000,000 and 10,000,000 spheres (tiles of the
+            10,000 bed) on the GPU engine (``particles/softsphere_gpu.py``), the only rows then run.
 gas step    One gas-phase step on the 15 × 25, 39 × 60 and 150 × 300 grids
             (``gas_step_benchmark``: Hoomans 1996 orifice bed), with the
             pressure-correction solver ``gas_linear_solver`` ("auto", or e.g. "band"; for
@@ -142,7 +144,8 @@ def _settle(n: int, path: Path, verbose: bool) -> Path:
     return path
 
 
-def load_bed_engine(n: int):
+def load_bed_engine(n: int, device: str = "cpu"):
+    """The soft-sphere engine of the settled dense bed of n spheres (``device`` "gpu": the GPU engine)."""
     from .particles.softsphere import SoftSphereEngine
     from .state import ParticleState
 
@@ -152,6 +155,10 @@ def load_bed_engine(n: int):
     case.walls[0].upper = tuple(float(x) for x in hi)
     st = ParticleState.create(bed["position"], np.zeros_like(bed["position"]), bed["diameter"],
                               np.zeros(n, np.int64), np.array([DENSITY]))
+    if device == "gpu":
+        from .particles.softsphere_gpu import SoftSphereGPUEngine
+
+        return SoftSphereGPUEngine(case.with_overrides({"device": "gpu"}), state=st)
     return SoftSphereEngine(case, state=st)
 
 
@@ -363,17 +370,76 @@ def gas_bench_problem(nx: int, ny: int, convection: str = "upwind", linear_solve
     return solver, state, beta_of, voidage_at
 
 
-def run_bench(sizes="10000,100000", threads="1,2", steps: int = 0, as_json: str | None = None,
+GPU_SIZES = "100000,1000000,10000000"  # the dense-bed sizes of ``fluidem bench --device gpu``
+
+
+def gpu_name() -> str:
+    """The name of the GPU numba.cuda uses ("CUDA simulator" under NUMBA_ENABLE_CUDASIM)."""
+    from numba import cuda
+
+    try:
+        name = cuda.get_current_device().name
+        return name.decode() if isinstance(name, bytes) else str(name)
+    except Exception:  # noqa: BLE001 - the simulator's device has no name
+        return "CUDA simulator" if cuda.is_available() else "none"
+
+
+def run_gpu_bench(sizes=GPU_SIZES, steps: int = 0, as_json: str | None = None) -> list[dict]:
+    """The dense-bed rows on the GPU engine (``fluidem bench --device gpu``): particle-steps per second of
+    the settled Hertz–Mindlin bed of each size, the set-up (bed, renumbering, upload, first list) timed
+    apart. A size that fails (no GPU memory left, say) gets a row with its error and the next one runs."""
+    import gc
+
+    from .analysis.probes import contacts
+    from .particles.softsphere_gpu import cuda_available
+
+    if not cuda_available():
+        from .errors import CaseError
+
+        raise CaseError("bench --device gpu: no CUDA GPU is available (numba.cuda.is_available() is False)")
+    device = gpu_name()
+    rows = []
+    print(f"{'problem':26s} {'N':>9s} {'device':>22s} {'steps':>7s} {'wall s':>8s} {'particle-steps/s':>17s} "
+          f"{'contacts/particle':>18s} {'set-up s':>9s}", flush=True)
+    for n in [int(float(s)) for s in str(sizes).split(",") if s]:
+        row = {"problem": "dense bed 3D hertz (GPU)", "n_particles": n, "device": device}
+        try:
+            t0 = time.perf_counter()
+            eng = load_bed_engine(n, device="gpu")
+            row["setup_s"] = time.perf_counter() - t0
+            nsteps, wall = time_engine(eng, steps)
+            row.update(steps=nsteps, wall_s=wall, particle_steps_per_s=n * nsteps / wall,
+                       contacts_per_particle=contacts(eng)["coordination"], rebuilds=eng.rebuilds,
+                       partners_per_row=eng._row_length)
+            print(f"{row['problem']:26s} {n:9d} {device[:22]:>22s} {nsteps:7d} {wall:8.2f} "
+                  f"{row['particle_steps_per_s']:17.3e} {row['contacts_per_particle']:18.2f} {row['setup_s']:9.1f}",
+                  flush=True)
+        except Exception as err:  # noqa: BLE001 - one size's failure is a row of the table
+            row["error"] = f"{type(err).__name__}: {err}"
+            print(f"{row['problem']:26s} {n:9d} {device[:22]:>22s} failed: {row['error']}", flush=True)
+        rows.append(row)
+        eng = None
+        gc.collect()
+    if as_json:
+        Path(as_json).write_text(json.dumps(rows, indent=2) + "\n")
+    return rows
+
+
+def run_bench(sizes=None, threads="1,2", steps: int = 0, as_json: str | None = None,
               gas: bool = True, gas_linear_solver: str = "auto", coupled: bool = True,
               coupled_until: float = 0.25, hard_sphere: bool = True, hard_warmup: float = 0.5,
-              hard_until: float = 0.1) -> list[dict]:
+              hard_until: float = 0.1, device: str = "cpu") -> list[dict]:
+    """Every problem of the module docstring on the CPU; ``device = "gpu"``: the dense-bed rows on the GPU
+    only (``run_gpu_bench``; sizes default ``GPU_SIZES``)."""
+    if device == "gpu":
+        return run_gpu_bench(sizes or GPU_SIZES, steps, as_json)
     import numba
 
     from .analysis.probes import contacts
     from .case import load_case
     from .particles.softsphere import SoftSphereEngine
 
-    sizes = [int(s) for s in str(sizes).split(",") if s]
+    sizes = [int(s) for s in str(sizes or "10000,100000").split(",") if s]
     threads = [int(t) for t in str(threads).split(",") if t]
     rows = []
     for n in sizes:

@@ -250,6 +250,10 @@ class Case(Strict):
     neighbours: Neighbours = Field(default_factory=Neighbours, description="neighbour-list settings")
     output: Output = Field(default_factory=Output, description="what is written and how often")
     threads: int | None = Field(None, ge=1, description="compute threads; default one per 1200 particles, at most all cores")
+    device: Literal["cpu", "gpu", "auto"] = Field(
+        "cpu", description="where the soft-sphere particle step runs: cpu (Numba threads), gpu (an NVIDIA GPU through "
+        "numba-cuda; a case the GPU engine does not support, or no GPU found, is an error), auto (the GPU where one "
+        "is found and the case is supported, else the CPU)")
     gas: GasSection | None = Field(None, description="gas phase; omit for a DEM-only run")
     coupling: CouplingSection | None = Field(None, description="gas–particle exchange; default with [gas]")
     checks: ChecksSection = Field(default_factory=ChecksSection, description="health checks while the run steps")

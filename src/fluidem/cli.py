@@ -52,7 +52,8 @@ def cmd_run(args) -> int:
     if args.resume:
         if args.case or args.set:
             raise CaseError("--resume DIR continues a run as it was set up; give no CASE or --set with it")
-        sim = Simulation.resume(args.resume, progress=not args.quiet, threads=args.threads, until=args.until)
+        sim = Simulation.resume(args.resume, progress=not args.quiet, threads=args.threads, until=args.until,
+                                device=args.device)
         out = Path(args.resume)
     else:
         if not args.case:
@@ -62,6 +63,8 @@ def cmd_run(args) -> int:
             overrides["time.end"] = args.until
         if args.threads is not None:
             overrides["threads"] = args.threads
+        if args.device is not None:
+            overrides["device"] = args.device
         case = load_case(args.case, overrides)
         out = Path(args.out) if args.out else Path("runs") / f"{case.name}-{time.strftime('%Y%m%d-%H%M%S')}"
         sim = Simulation(case, out_dir=out, progress=not args.quiet)
@@ -108,7 +111,7 @@ def cmd_bench(args) -> int:
         raise CaseError(f"bench --hard-until = {args.hard_until!r}: must be a positive number of simulated seconds")
     run_bench(sizes=args.sizes, threads=args.threads, steps=args.steps, as_json=args.json, gas=not args.no_gas,
               coupled=not args.no_coupled, coupled_until=args.coupled_until, hard_sphere=not args.no_hard_sphere,
-              hard_until=args.hard_until)
+              hard_until=args.hard_until, device=args.device)
     return 0
 
 
@@ -143,6 +146,8 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="override a case key by dotted name, e.g. --set particles.contact.restitution=1.0")
     r.add_argument("--threads", type=int, help="compute threads (default: one per 1200 particles, at most all cores)")
+    r.add_argument("--device", choices=("cpu", "gpu", "auto"),
+                   help="where the particle step runs (the case's device key; with --resume: continue there)")
     r.add_argument("--resume", metavar="DIR",
                    help="continue a stopped run from DIR/restart.h5 (DIR/restart.prev.h5 where that is damaged)")
     r.set_defaults(func=cmd_run)
@@ -152,7 +157,10 @@ def build_parser() -> argparse.ArgumentParser:
     c.set_defaults(func=cmd_cases)
 
     b = sub.add_parser("bench", help="throughput on standard problems (particle-steps per second)")
-    b.add_argument("--sizes", default="10000,100000", help="dense-bed sizes, comma separated")
+    b.add_argument("--sizes", default=None,
+                   help="dense-bed sizes, comma separated (default 10000,100000; with --device gpu 1e5,1e6,1e7)")
+    b.add_argument("--device", choices=("cpu", "gpu"), default="cpu",
+                   help="gpu: the dense-bed rows on the GPU engine only (default cpu: every problem on the CPU)")
     b.add_argument("--threads", default="1,2", help="thread counts, comma separated")
     b.add_argument("--steps", type=int, default=0, help="timed steps per problem (default: about 5 s of work)")
     b.add_argument("--json", metavar="FILE", help="also write the results as JSON")

@@ -59,7 +59,7 @@ def import_submodules(package_name: str, package_path, skip=("base",)) -> None:
 
 
 def compiled_switch(name: str, cases: dict[int, Callable], args: tuple[str, ...], code: str, default: str,
-                    module: str, source_file: str, **njit_options):
+                    module: str, source_file: str, jit: Callable | None = None, **njit_options):
     """A compiled function ``name(*args)`` that calls ``cases[c](*args)`` for the integer ``c`` the expression
     ``code`` gives (``"int(p[0])"``), and returns ``default`` for any other code.
 
@@ -69,7 +69,8 @@ def compiled_switch(name: str, cases: dict[int, Callable], args: tuple[str, ...]
     them inlined (first-class function objects are called through pointers), hence the source text. The
     function is compiled with ``njit(cache=True, **njit_options)`` and cached as if defined in
     ``source_file``; fluidem's cache stamp (``_numba_cache``) covers every model file, so a new model
-    recompiles it.
+    recompiles it. ``jit``: another decorator to compile it with instead (the CUDA dispatch passes
+    ``cuda.jit(device=True)`` and device versions of the cases); ``njit_options`` are then not used.
     """
     from numba import njit
 
@@ -84,4 +85,6 @@ def compiled_switch(name: str, cases: dict[int, Callable], args: tuple[str, ...]
     exec(compile("\n".join(lines) + "\n", source_file, "exec"), glob)  # noqa: S102 - source built above
     func = glob[name]
     func.__qualname__ = name
+    if jit is not None:
+        return jit(func)
     return njit(cache=True, **njit_options)(func)

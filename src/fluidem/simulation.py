@@ -593,15 +593,18 @@ class Simulation:
 
     @classmethod
     def resume(cls, out_dir: str | Path, progress: bool = False, threads: int | None = None,
-               until: float | None = None) -> "Simulation":
-        """Continue the run in ``out_dir`` from its last checkpoint (optionally with another thread count) to
-        ``until`` (default the case's ``time.end``; CaseError if the checkpoint is already there)."""
+               until: float | None = None, device: str | None = None) -> "Simulation":
+        """Continue the run in ``out_dir`` from its last checkpoint (optionally with another thread count, or on
+        another device: a checkpoint of either soft-sphere engine continues on the other) to ``until``
+        (default the case's ``time.end``; CaseError if the checkpoint is already there)."""
         out_dir = Path(out_dir)
         if not (out_dir / "case.toml").exists():
             raise CaseError(f"--resume {out_dir}: not a run directory (no case.toml)")
         case = read_run_case(out_dir / "case.toml")
         if threads is not None:
             case.threads = threads
+        if device is not None:
+            case.device = device
         return cls(case, out_dir=out_dir, resume=True, progress=progress, until=until)
 
 

@@ -153,10 +153,23 @@ class ParticleEngine:
         """(i, j) int64 arrays of the pairs whose spheres touch or overlap, each pair once."""
         raise NotImplementedError
 
+    def positions_finite(self) -> bool:
+        """True if every particle position is finite (an engine that keeps its particles elsewhere checks
+        them there)."""
+        return bool(np.isfinite(self.state.position).all())
+
 
 def engine_for(case, state: ParticleState | None = None) -> ParticleEngine:
     """The particle engine for ``case`` (optionally starting from ``state``): the event-driven one when the
-    contact law is instantaneous (``hard_sphere``), else the soft-sphere one."""
+    contact law is instantaneous (``hard_sphere``), else the soft-sphere one, on the GPU where the case's
+    ``device`` asks for it (``softsphere_gpu.choose_device``: a ``CaseError`` naming what the GPU engine
+    does not support, or that no GPU is found, for ``device = "gpu"``)."""
+    from .softsphere_gpu import choose_device
+
+    if choose_device(case) == "gpu":
+        from .softsphere_gpu import SoftSphereGPUEngine
+
+        return SoftSphereGPUEngine(case, state=state)
     if case.particles.contact.instantaneous:
         from .hardsphere import HardSphereEngine
 

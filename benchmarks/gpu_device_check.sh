@@ -1,0 +1,70 @@
+#!/usr/bin/env bash
+# The GPU engine on a machine with an NVIDIA GPU: its tests run on the device (no simulator), then the
+# dense-bed rows of `fluidem bench --device gpu` (1e5, 1e6, 1e7 Hertz-Mindlin spheres) and the CPU's
+# one-core rate of the same bed for comparison. Results go to $OUT (default ./gpu-check-out):
+#   env.txt         GPU, driver, Python and library versions
+#   ptx.log         every kernel compiled for the GPU's compute capability
+#   tests.log       python3 -m pytest tests/gpu (forces, trajectories, checkpoints against the CPU engine)
+#   bench_gpu.json  bench_gpu.log   the GPU rows
+#   bench_cpu.json  bench_cpu.log   the CPU rows (the 100,000-sphere bed, one thread)
+#
+# Needs Python 3.12 with numpy, numba, numba-cuda, scipy, h5py and matplotlib (the device image has them)
+# plus pydantic and tomli-w. Where those two are missing and nothing can be downloaded, carry them as
+# wheels in .whl/ (ignored by git) from a machine that reaches PyPI, in the repository root:
+#
+#   echo /.whl/ >> .git/info/exclude
+#   python3 -m pip download --no-deps --only-binary=:all: --python-version 3.12 --implementation cp \
+#       --platform manylinux_2_17_x86_64 --platform manylinux2014_x86_64 -d .whl \
+#       pydantic pydantic-core annotated-types typing-inspection tomli-w
+#
+# (one version of each; pydantic-core must be the one pydantic pins). The script installs .whl/*.whl into
+# /tmp/site when the folder exists. It takes about 6-8 minutes, most of it compiling the CPU kernels once
+# and building the 1e7 bed; run it from the repository root:
+#
+#   bash benchmarks/gpu_device_check.sh
+set -uo pipefail
+cd "$(dirname "$0")/.."
+OUT=${OUT:-$PWD/gpu-check-out}
+mkdir -p "$OUT"
+export PYTHONUNBUFFERED=1
+if [ -d .whl ] && ls .whl/*.whl >/dev/null 2>&1; then
+    python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site \
+        .whl/*.whl || exit 1
+    export PYTHONPATH=/tmp/site
+fi
+export PYTHONPATH="$PWD/src${PYTHONPATH:+:$PYTHONPATH}"
+unset NUMBA_ENABLE_CUDASIM
+
+{
+    nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv 2>&1
+    python3 - <<'EOF'
+import numpy as np
+if not hasattr(np, "row_stack"):
+    np.row_stack = np.vstack
+import platform, numba
+from numba import cuda
+print("python", platform.python_version(), "numpy", np.__version__, "numba", numba.__version__)
+try:
+    import numba_cuda
+    print("numba-cuda", numba_cuda.__version__)
+except ImportError:
+    print("numba-cuda not installed (numba's own numba.cuda)")
+print("cuda.is_available()", cuda.is_available())
+if cuda.is_available():
+    d = cuda.get_current_device()
+    print("device", d.name, "compute capability", d.compute_capability)
+EOF
+} 2>&1 | tee "$OUT/env.txt"
+
+cc=$(python3 -c "import numpy as np
+if not hasattr(np, 'row_stack'): np.row_stack = np.vstack
+from numba import cuda; print(*cuda.get_current_device().compute_capability)" 2>/dev/null || echo "9 0")
+python3 tests/_helpers/gpu_ptx.py $cc 2>&1 | tee "$OUT/ptx.log"
+
+python3 -m pytest -q -p no:cacheprovider tests/gpu 2>&1 | tee "$OUT/tests.log"
+
+python3 -m fluidem bench --device gpu --sizes 100000,1000000,10000000 --json "$OUT/bench_gpu.json" 2>&1 \
+    | tee "$OUT/bench_gpu.log"
+
+python3 -m fluidem bench --sizes 100000 --threads 1 --no-gas --no-coupled --no-hard-sphere \
+    --json "$OUT/bench_cpu.json" 2>&1 | tee "$OUT/bench_cpu.log"

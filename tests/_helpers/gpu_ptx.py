@@ -1,0 +1,52 @@
+"""Compile every GPU kernel of fluidem to PTX for a compute capability, without a GPU (numba-cuda, NVVM and
+NVRTC installed). The CUDA simulator runs the kernels as Python and checks no types; this checks that
+numba-cuda types and compiles them. Run as ``python3 tests/_helpers/gpu_ptx.py [major minor]``; prints one
+line per kernel and exits non-zero on the first failure.
+"""
+from __future__ import annotations
+
+import sys
+import types
+
+import numpy as np
+
+if not hasattr(np, "row_stack"):
+    np.row_stack = np.vstack
+
+
+def kernel_signatures(SC, NC, T) -> dict:
+    """{kernel: argument types} as the GPU engine launches them (C-contiguous device arrays)."""
+    f1, f2, f3 = T.float64[::1], T.float64[:, ::1], T.float64[:, :, ::1]
+    i1, i2, l1, u2 = T.int32[::1], T.int32[:, ::1], T.int64[::1], T.uint8[:, ::1]
+    b, f, i = T.boolean, T.float64, T.int64
+    return {
+        SC.pair_and_wall_forces: (f2, f2, f2, f1, f1, l1, f3, i2, i1, f3, f3, f2, f2, f2, i, f3, u2, f1, f2, f1, b, b,
+                                  f, f, b, f2, f2),
+        SC.kick_drift: (f2, f2, f2, f2, f2, f1, f1, f, i, b, f2, f, i1),
+        SC.all_finite: (f2, i1),
+        NC.fill_int: (i1, i),
+        NC.bounds: (f2, f1, f1),
+        NC.bin_cells: (f2, f, f, f, f, f, f, i, i, i, i1, i2, i1),
+        NC.fill_rows: (f2, f1, f, f, f, f, f, f, f, i, i, i, i1, i2, i2, i1, i1),
+        NC.carry_history: (i2, i1, f3, i2, i1, f3),
+    }
+
+
+def main(cc=(9, 0)) -> int:
+    import numba.cuda.dispatcher as dispatcher
+    from numba import cuda
+    from numba import types as T
+
+    # device functions are compiled for the current device's compute capability; there is none here
+    dispatcher.get_current_device = lambda: types.SimpleNamespace(compute_capability=cc)
+    from fluidem.particles import _neighbours_cuda as NC
+    from fluidem.particles import _softsphere_cuda as SC
+
+    for kernel, sig in kernel_signatures(SC, NC, T).items():
+        ptx, _ = cuda.compile_ptx(kernel.py_func, sig, cc=cc)
+        print(f"{kernel.py_func.__name__}: {len(ptx)} characters of PTX for sm_{cc[0]}{cc[1]}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(tuple(int(a) for a in sys.argv[1:3]) if len(sys.argv) > 2 else (9, 0)))

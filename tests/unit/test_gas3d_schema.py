@@ -34,7 +34,7 @@ def test_three_cells_entries_build_the_3d_solver():
 @pytest.mark.parametrize("change, message", [
     ({"boundaries": {k: v for k, v in GAS_3D["boundaries"].items() if k != "back"}}, "missing side"),
     ({"grid": {"cells": [6, 8], "size": [0.06, 0.08]}}, "depth"),
-    ({"grid": {"cells": [6, 8, 5], "size": [0.06, 0.08]}}, "one per cells entry"),
+    ({"grid": {"cells": [6, 8, 5], "size": [0.06, 0.08]}}, "one size per cells entry"),
     ({"grid": {"cells": [6, 8, 5], "size": [0.06, 0.08, 0.05], "depth": 0.01}}, "no depth of its own"),
     ({"linear_solver": "band"}, "2D block-tridiagonal"),
     ({"dt": 1e-2}, "Courant"),

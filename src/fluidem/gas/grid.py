@@ -132,7 +132,10 @@ class StaggeredGrid:
         if len(cells) not in (2, 3) or any(c != c0 for c, c0 in zip(cells, self.cells)) or min(cells) < 1:
             raise CaseError(f"gas.grid.cells = {self.cells!r}: must be two (nx, ny) or three (nx, ny, nz) "
                             "integers >= 1")
-        if len(size) != len(cells) or not all(np.isfinite(size)) or min(size) <= 0.0:
+        if len(size) != len(cells):
+            raise CaseError(f"gas.grid.cells = {self.cells!r} and gas.grid.size = {self.size!r}: give one size per cells "
+                            "entry, (Lx, Ly) [m] for a 2D grid (two cells entries), (Lx, Ly, Lz) for a 3D one (three)")
+        if not all(np.isfinite(size)) or min(size) <= 0.0:
             axes = "(Lx, Ly)" if len(cells) == 2 else "(Lx, Ly, Lz)"
             raise CaseError(f"gas.grid.size = {self.size!r}: must be {len(cells)} lengths > 0 [m] {axes}, one per "
                             "cells entry")

@@ -103,7 +103,7 @@ class Rectangle(Patch):
     """A rectangular inflow patch from ``start = (a0, b0)`` to ``end = (a1, b1)`` [m] in the side's in-plane
     coordinates (a slot, a porous plate's section)."""
 
-    shape: Literal["rectangle"] = "rectangle"
+    shape: Literal["rectangle"] = Field("rectangle", description="the patch's shape: a rectangle")
     start: tuple[float, float] = Field(description="(a0, b0): lower corner [m] in the side's in-plane coordinates")
     end: tuple[float, float] = Field(description="(a1, b1): upper corner [m]")
 
@@ -132,7 +132,7 @@ class Circle(Patch):
     """A circular inflow patch of ``radius`` [m] about ``centre = (a, b)`` [m] in the side's in-plane
     coordinates (a nozzle, a central jet)."""
 
-    shape: Literal["circle"] = "circle"
+    shape: Literal["circle"] = Field("circle", description="the patch's shape: a circle")
     centre: tuple[float, float] = Field(description="(a, b): centre [m] in the side's in-plane coordinates")
     radius: float = Field(gt=0.0, description="[m]")
 

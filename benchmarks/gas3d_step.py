@@ -23,14 +23,21 @@ from __future__ import annotations
 import argparse
 import time
 
-import numpy as np
-
 import harness  # benchmarks/harness.py: this script's folder is first on sys.path
+import numpy as np
 
 
 def bed_problem(nx: int, ny: int, nz: int, linear_solver: str = "auto"):
     """The 3D bubbling bed on an nx x ny x nz grid: (solver, state, step_args, dt)."""
-    from fluidem.gas import Circle, GasProperties, GasSolver, Inflow, PressureOutlet, StaggeredGrid, Wall
+    from fluidem.gas import (
+        Circle,
+        GasProperties,
+        GasSolver,
+        Inflow,
+        PressureOutlet,
+        StaggeredGrid,
+        Wall,
+    )
 
     L, H = 0.2, 0.4
     grid = StaggeredGrid(cells=(nx, ny, nz), size=(L, H, L))

@@ -7,7 +7,12 @@ import h5py
 import numpy as np
 
 from fluidem.gas import GasProperties, GasSolver, StaggeredGrid, Wall
-from fluidem.io.gas_fields import GasFieldWriter, cell_fields, read_gas_fields, read_gas_grid
+from fluidem.io.gas_fields import (
+    GasFieldWriter,
+    cell_fields,
+    read_gas_fields,
+    read_gas_grid,
+)
 
 
 def test_3d_fields_are_written_as_a_3d_rectilinear_grid(tmp_path):

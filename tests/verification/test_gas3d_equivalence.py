@@ -13,8 +13,17 @@ velocity across the thin axis stays 0.
 import numpy as np
 import pytest
 
-from fluidem.gas import (FreeSlip, GasProperties, GasSolver, Inflow, PressureOutlet, Rectangle, Segment,
-                         StaggeredGrid, Wall)
+from fluidem.gas import (
+    FreeSlip,
+    GasProperties,
+    GasSolver,
+    Inflow,
+    PressureOutlet,
+    Rectangle,
+    Segment,
+    StaggeredGrid,
+    Wall,
+)
 
 NX, NY, LX, LY, DEPTH = 12, 20, 0.12, 0.2, 0.004
 JET = (0.05, 0.07)
@@ -75,7 +84,7 @@ def test_one_cell_deep_3d_grid_gives_the_2d_fields(thin, convection, density):
     props = GasProperties(density=density)
     s2 = two_d(props, convection)
     s3, axes = three_d(props, convection, thin)
-    X, Y = s2.grid.centres()
+    _, Y = s2.grid.centres()
     eps = np.where(Y < 0.08, 0.45, 1.0)
     beta = np.where(Y < 0.08, 3000.0, 0.0)
     st2 = s2.initial_state(voidage=eps)
@@ -106,7 +115,7 @@ def test_the_multigrid_gives_the_2d_fields_to_the_solver_tolerance(thin):
     props = GasProperties()
     s2 = two_d(props, "upwind")
     s3, axes = three_d(props, "upwind", thin, linear_solver="multigrid")
-    X, Y = s2.grid.centres()
+    _, Y = s2.grid.centres()
     eps = np.where(Y < 0.08, 0.45, 1.0)
     st2 = s2.initial_state(voidage=eps)
     st3 = s3.initial_state(voidage=to_3d(eps, axes, thin))

@@ -32,7 +32,7 @@ def relax(axis: int, dt: float, t_end: float):
     state = solver.initial_state(voidage=EPS, velocity=tuple(start), pressure=1e5)
     names = ("solids_u", "solids_v", "solids_w")
     kwargs = {n: (solids if a == axis else 0.0) for a, n in enumerate(names)}
-    steps = int(round(t_end / dt))
+    steps = round(t_end / dt)
     discrete = (0.1 - solids) / (1.0 + BETA * dt / (EPS * RHO)) ** steps + solids
     for k in range(steps):
         info = solver.advance(state, dt, k * dt, beta=BETA, **kwargs)

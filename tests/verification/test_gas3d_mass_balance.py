@@ -11,8 +11,17 @@ with the multigrid-preconditioned GMRES in place of SuperLU.
 import numpy as np
 import pytest
 
-from fluidem.gas import (Circle, GasProperties, GasSolver, Inflow, Outflow, PressureOutlet, Pulse, StaggeredGrid,
-                         Wall)
+from fluidem.gas import (
+    Circle,
+    GasProperties,
+    GasSolver,
+    Inflow,
+    Outflow,
+    PressureOutlet,
+    Pulse,
+    StaggeredGrid,
+    Wall,
+)
 
 TOL = 1e-10
 

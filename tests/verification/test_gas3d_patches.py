@@ -11,10 +11,19 @@ import math
 import numpy as np
 import pytest
 
-from fluidem.gas import (Circle, GasProperties, GasSolver, Inflow, PressureOutlet, Pulse, Rectangle, StaggeredGrid,
-                         Wall)
-from fluidem.gas.boundaries.patches import circle_rectangle_area
 from fluidem.errors import CaseError
+from fluidem.gas import (
+    Circle,
+    GasProperties,
+    GasSolver,
+    Inflow,
+    PressureOutlet,
+    Pulse,
+    Rectangle,
+    StaggeredGrid,
+    Wall,
+)
+from fluidem.gas.boundaries.patches import circle_rectangle_area
 
 
 @pytest.mark.parametrize("box", [(-1.0, 1.0, -1.0, 1.0), (0.0, 1.0, 0.0, 1.0), (0.1, 0.3, -0.2, 0.45),

@@ -73,7 +73,10 @@ from ._layout3d import (
     SOLVED,
 )
 from ._operators import face_value
-from ._solver_kernels import _normal, _tangential  # ghost velocities per flag, shared with 2D
+from ._solver_kernels import (  # ghost velocities per flag, shared with 2D
+    _normal,
+    _tangential,
+)
 from .grid import PERIODIC
 
 MASS_FLOOR = 1e-4  # share of (gas mass / dt) in the reference flow of the mass residual (as in 2D)

@@ -34,7 +34,7 @@ What is not here yet: the coupling to particles (a case with a 3D gas grid and p
 from __future__ import annotations
 
 import math
-from typing import Mapping
+from collections.abc import Mapping
 
 import numpy as np
 import scipy.sparse as sp
@@ -46,9 +46,33 @@ from . import _multigrid3d_kernels as MK
 from . import _solver3d_kernels as K3
 from ._multigrid3d import multigrid_arrays
 from .boundaries import BoundaryCondition
-from .grid import FREE_SLIP, INFLOW, NO_SLIP, OUTFLOW, PERIODIC, PRESSURE, SIDE_AXIS, StaggeredGrid, check_sides
-from .solver import (COARSEST, KRYLOV_MAX, KRYLOV_REDUCTION, KRYLOV_RESTART, REFUSED_SOLVERS, SCHEMES, SLOW_CONVERGENCE,
-                     GasConvergenceError, GasProperties, GasSolver, GasState, StepInfo, _refused, _show)
+from .grid import (
+    FREE_SLIP,
+    INFLOW,
+    NO_SLIP,
+    OUTFLOW,
+    PERIODIC,
+    PRESSURE,
+    SIDE_AXIS,
+    StaggeredGrid,
+    check_sides,
+)
+from .solver import (
+    COARSEST,
+    KRYLOV_MAX,
+    KRYLOV_REDUCTION,
+    KRYLOV_RESTART,
+    REFUSED_SOLVERS,
+    SCHEMES,
+    SLOW_CONVERGENCE,
+    GasConvergenceError,
+    GasProperties,
+    GasSolver,
+    GasState,
+    StepInfo,
+    _refused,
+    _show,
+)
 
 LINEAR_SOLVERS_3D = ("auto", "multigrid", "superlu")
 _LOW_SIDES = ("left", "bottom", "front")
@@ -119,7 +143,7 @@ class GasSolver3D(GasSolver):
     # ------------------------------------------------------------ set-up
     def _setup_faces(self):
         """Face kinds and inward signs from the flags; the sides with prescribed velocities and pressures."""
-        gd, fl = self.grid, self.flags
+        gd = self.grid
         kind_of_ghost = {FREE_SLIP: lay.FIXED, NO_SLIP: lay.FIXED, INFLOW: lay.FIXED, PRESSURE: lay.SOLVED,
                          OUTFLOW: lay.OUTFLOW_FACE, PERIODIC: lay.SOLVED}
         self.K = np.zeros((2, 3, gd.nx + 1, gd.ny + 1, gd.nz + 1), np.int8)
@@ -541,4 +565,4 @@ class GasSolver3D(GasSolver):
         return min(dt_c, dt_v)
 
 
-__all__ = ["GasSolver3D", "LINEAR_SOLVERS_3D"]
+__all__ = ["LINEAR_SOLVERS_3D", "GasSolver3D"]

@@ -168,4 +168,4 @@ def overlap(p: Patch, q: Patch) -> bool:
     return math.dist(nearest, c.centre) < c.radius
 
 
-__all__ = ["Patch", "Rectangle", "Circle", "circle_rectangle_area", "overlap"]
+__all__ = ["Circle", "Patch", "Rectangle", "circle_rectangle_area", "overlap"]

@@ -279,6 +279,11 @@ class Case(Strict):
             raise ValueError("coupling: the [coupling] section needs a [gas] section; add one, or remove [coupling] "
                              "for a run without gas")
         if self.gas is not None:
+            if self.gas.grid.dimensions == 3:
+                raise ValueError(f"gas.grid.cells = {list(self.gas.grid.cells)}: a 3D gas grid is not coupled to "
+                                 "particles yet; a case with particles takes a 2D gas grid (cells = [nx, ny] and a "
+                                 "depth). The 3D gas solver runs on its own: fluidem.gas.GasSolver(StaggeredGrid("
+                                 "cells=(nx, ny, nz), ...), ...)")
             if self.gravity[2] != 0.0:
                 raise ValueError(f"{gravity} = {list(self.gravity)}: the 2D gas grid (x-y) needs gravity in the x-y "
                                  "plane (z = 0); set gravity = [0.0, -9.81, 0.0]")

@@ -15,16 +15,17 @@ Public surface::
 The particle side enters only as arrays (voidage, β with the solids velocity, or a
 momentum source), so the solver runs and is verified on its own.
 """
-from .boundaries import (BoundaryCondition, FreeSlip, Inflow, Outflow, Periodic, PressureOutlet, Pulse, Segment, Table, Wall,
-                         boundary_conditions)
+from .boundaries import (BoundaryCondition, Circle, FreeSlip, Inflow, Outflow, Periodic, PressureOutlet, Pulse, Rectangle,
+                         Segment, Table, Wall, boundary_conditions)
 from .grid import (CORNER, FLAG_NAMES, FREE_SLIP, INFLOW, INTERIOR, NO_SLIP, OUTFLOW, PERIODIC, PRESSURE,
                    StaggeredGrid)
 from .solver import GasConvergenceError, GasProperties, GasSolver, GasState, StepInfo
+from .solver3d import GasSolver3D
 from .schema import GasSection, GridSpec as Grid, PropertiesSpec as Properties  # the case's [gas] building blocks
 
 __all__ = [
-    "GasSection", "Grid", "Properties", "StaggeredGrid", "GasProperties", "GasSolver", "GasState", "StepInfo", "GasConvergenceError",
-    "BoundaryCondition", "Wall", "FreeSlip", "Inflow", "Segment", "Pulse", "Table", "PressureOutlet",
+    "GasSection", "Grid", "Properties", "StaggeredGrid", "GasProperties", "GasSolver", "GasSolver3D", "GasState", "StepInfo", "GasConvergenceError",
+    "BoundaryCondition", "Wall", "FreeSlip", "Inflow", "Segment", "Rectangle", "Circle", "Pulse", "Table", "PressureOutlet",
     "Outflow", "Periodic", "boundary_conditions", "INTERIOR", "FREE_SLIP", "NO_SLIP", "INFLOW", "PRESSURE",
     "OUTFLOW", "CORNER", "PERIODIC", "FLAG_NAMES",
 ]

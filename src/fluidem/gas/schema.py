@@ -6,6 +6,11 @@ chosen by its ``kind``: the objects a case holds are the ones the solver takes (
 ``GasSection.build(gravity)`` gives the ``GasSolver``; the section is validated by
 building its parts once, so a case that loads also builds.
 
+Three ``cells`` entries make a 3D grid (``grid = { cells = [nx, ny, nz], size = [Lx, Ly, Lz] }``, no
+depth), with the six sides left, right, bottom, top, front (z = 0) and back (z = Lz), and ``build`` gives
+the 3D solver. A case with particles refuses a 3D grid for now (``Case``): the 3D gas is not coupled to
+particles yet; the section is used on its own (``GasSection.model_validate(...).build(gravity)``).
+
 Example (TOML)::
 
     [gas]
@@ -37,11 +42,11 @@ from __future__ import annotations
 
 from typing import Annotated, Literal, Union
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
 from ..errors import CaseError
 from .boundaries import boundary_conditions
-from .grid import PERIODIC, SIDES, StaggeredGrid
+from .grid import OPPOSITE_PAIRS, PERIODIC, SIDE_AXIS, SIDES, SIDES_3D, StaggeredGrid
 from .solver import REFUSED_SOLVERS, GasProperties, GasSolver
 
 class _Strict(BaseModel):
@@ -49,18 +54,25 @@ class _Strict(BaseModel):
 
 
 class GridSpec(_Strict):
-    """Uniform 2D staggered grid (``StaggeredGrid``)."""
+    """Uniform staggered grid (``StaggeredGrid``): 2D with two ``cells`` entries and a depth, 3D with three."""
 
-    cells: tuple[int, int] = Field(description="number of cells (nx, ny)")
-    size: tuple[float, float] = Field(description="domain width and height (Lx, Ly) [m]; lower-left corner at 0; "
-                                                  "must cover every box wall and the placement region in x and y")
-    depth: float = Field(gt=0.0, description="extent along z of the 2D grid [m]; equal to the z extent of the "
-                                             "particles' box walls")
+    cells: tuple[int, ...] = Field(description="number of cells (nx, ny) of a 2D grid or (nx, ny, nz) of a 3D one")
+    size: tuple[float, ...] = Field(description="domain extent (Lx, Ly) or (Lx, Ly, Lz) [m]; the lower-left(-front) "
+                                                "corner at 0; must cover every box wall and the placement region")
+    depth: float | None = Field(None, gt=0.0, description="extent along z of a 2D grid [m] (required there), equal "
+                                                          "to the z extent of the particles' box walls; a 3D grid "
+                                                          "has none (its z extent is size[2])")
 
     @model_validator(mode="after")
     def _check(self):
+        if len(self.cells) == 2 and self.depth is None:
+            raise ValueError("depth [m] is required for a 2D grid (two cells entries); a 3D grid has three")
         self.build()
         return self
+
+    @property
+    def dimensions(self) -> int:
+        return len(self.cells)
 
     def build(self) -> StaggeredGrid:
         try:
@@ -93,8 +105,11 @@ class GasSection(_Strict):
     dt: float = Field(gt=0.0, description="gas time step DT [s]; the DEM dt is DT / ceil(DT / dt_DEM)")
     grid: GridSpec
     properties: PropertiesSpec = Field(default_factory=PropertiesSpec)
-    boundaries: dict[str, BoundaryChoice] = Field(description="a condition on each of left, right, bottom, top")
-    initial_velocity: tuple[float, float] = Field((0.0, 0.0), description="interstitial gas velocity at t = 0 [m/s]")
+    boundaries: dict[str, BoundaryChoice] = Field(description="a condition on each of left, right, bottom, top "
+                                                              "(and front, back on a 3D grid)")
+    initial_velocity: tuple[float, float] | tuple[float, float, float] = Field(
+        (0.0, 0.0), description="interstitial gas velocity at t = 0 [m/s]: (u, v), or (u, v, w) on a 3D grid (a "
+                                "pair there means w = 0)")
     convection: Literal["upwind", "tvd"] = Field(
         "upwind", description="convection scheme of the momentum equations: first-order upwind or TVD "
                               "(second order, Courant limit 0.5)")
@@ -121,15 +136,30 @@ class GasSection(_Strict):
 
     @field_validator("boundaries")
     @classmethod
-    def _sides(cls, v):
-        missing = [s for s in SIDES if s not in v]
+    def _sides(cls, v, info: ValidationInfo):
+        grid = info.data.get("grid")
+        sides = SIDES_3D if grid is not None and grid.dimensions == 3 else SIDES
+        unknown = sorted(set(v) - set(sides))
+        if unknown:
+            more = " (front and back are the z sides of a 3D grid)" if set(unknown) & {"front", "back"} else ""
+            raise ValueError(f"unknown side(s) {', '.join(map(repr, unknown))}; allowed: {', '.join(sides)}{more}")
+        missing = [s for s in sides if s not in v]
         if missing:
-            raise ValueError(f"missing side(s) {', '.join(missing)}: give a kind for each of {', '.join(SIDES)}")
+            raise ValueError(f"missing side(s) {', '.join(missing)}: give a kind for each of {', '.join(sides)}")
         periodic = {s for s, b in v.items() if b.flag == PERIODIC}
-        for a, b in (("left", "right"), ("bottom", "top")):
+        for a, b in OPPOSITE_PAIRS[:len(sides) // 2]:
             if (a in periodic) != (b in periodic):
                 raise ValueError(f"sides {a} and {b}: periodic needs both opposite sides periodic")
         return v
+
+    @model_validator(mode="after")
+    def _dimensions(self):
+        if self.grid.dimensions == 3 and self.linear_solver == "band":
+            raise ValueError("linear_solver = 'band' is the 2D block-tridiagonal LU; on a 3D grid use 'auto', "
+                             "'multigrid' or 'superlu'")
+        if self.grid.dimensions == 2 and len(self.initial_velocity) == 3:
+            raise ValueError(f"initial_velocity = {list(self.initial_velocity)}: a 2D grid takes (u, v)")
+        return self
 
     @model_validator(mode="after")
     def _inflow_courant(self):
@@ -142,7 +172,7 @@ class GasSection(_Strict):
             speed = bc.fastest_inflow()
             if speed == 0.0:
                 continue
-            k = 1 if side in ("bottom", "top") else 0
+            k = SIDE_AXIS[side]
             width = self.grid.size[k] / self.grid.cells[k]
             courant = speed * self.dt / width
             if courant > limit:
@@ -153,8 +183,15 @@ class GasSection(_Strict):
         return self
 
     def build(self, gravity) -> GasSolver:
-        """The ``GasSolver`` of this section under ``gravity`` (gx, gy[, 0]) [m/s^2]."""
-        return GasSolver(self.grid.build(), self.properties.build(),
-                         dict(self.boundaries),
-                         gravity=tuple(gravity)[:2], convection=self.convection, tolerance=self.tolerance,
-                         linear_solver=self.linear_solver)
+        """The ``GasSolver`` of this section under ``gravity`` (gx, gy[, 0]) [m/s^2]; on a 3D grid the
+        ``GasSolver3D`` under (gx, gy, gz)."""
+        grid = self.grid.build()
+        g = tuple(gravity)[:2] if grid.dimensions == 2 else tuple(gravity)
+        return GasSolver(grid, self.properties.build(), dict(self.boundaries), gravity=g, convection=self.convection,
+                         tolerance=self.tolerance, linear_solver=self.linear_solver)
+
+    @property
+    def velocity(self) -> tuple[float, ...]:
+        """``initial_velocity`` with one entry per axis of the grid (w = 0 when a 3D grid was given a pair)."""
+        v = tuple(self.initial_velocity)
+        return v + (0.0,) * (self.grid.dimensions - len(v))

@@ -171,6 +171,8 @@ class GasState:
     p, rho, voidage : (nx, ny) float64   pressure [Pa], density [kg/m^3], voidage ε [-] at centres
     u : (nx + 1, ny) float64             interstitial x velocity on x-faces [m/s]
     v : (nx, ny + 1) float64             interstitial y velocity on y-faces [m/s]
+    w : None (2D) or (nx, ny, nz + 1)    interstitial z velocity on z-faces [m/s] of a 3D grid, whose
+                                         other arrays then have the third axis nz: (nx, ny, nz), ...
     """
 
     p: np.ndarray
@@ -178,12 +180,16 @@ class GasState:
     u: np.ndarray
     v: np.ndarray
     voidage: np.ndarray
+    w: np.ndarray | None = None
+
+    def _keys(self) -> tuple[str, ...]:
+        return ("p", "rho", "u", "v", "voidage") + (() if self.w is None else ("w",))
 
     def copy(self) -> "GasState":
-        return GasState(*(getattr(self, k).copy() for k in ("p", "rho", "u", "v", "voidage")))
+        return GasState(**{k: getattr(self, k).copy() for k in self._keys()})
 
     def arrays(self) -> dict[str, np.ndarray]:
-        return {k: getattr(self, k) for k in ("p", "rho", "u", "v", "voidage")}
+        return {k: getattr(self, k) for k in self._keys()}
 
 
 @dataclass(frozen=True)
@@ -270,13 +276,25 @@ class GasSolver:
     >>> info = solver.advance(state, dt=1e-4, t=0.0, beta=beta, solids_u=0.0, solids_v=0.0)
     >>> info.converged
     True
+
+    A 3D grid (``StaggeredGrid(cells=(nx, ny, nz), ...)``) makes a ``GasSolver3D`` (``solver3d.py``): the
+    same interface with six sides, a third velocity component and 3D arrays.
     """
+
+    def __new__(cls, grid=None, *args, **kwargs):
+        if cls is GasSolver and isinstance(grid, StaggeredGrid) and grid.dimensions == 3:
+            from .solver3d import GasSolver3D
+
+            return super().__new__(GasSolver3D)
+        return super().__new__(cls)
 
     def __init__(self, grid: StaggeredGrid, props: GasProperties, boundaries: Mapping[str, BoundaryCondition],
                  gravity=(0.0, -9.81), convection: str = "upwind", tolerance: float = 1e-10,
                  max_iterations: int = 50, jacobian_reuse: float = 1e-2, linear_solver: str = "auto"):
         if not isinstance(grid, StaggeredGrid):
             raise CaseError(f"gas.grid = {grid!r}: must be a StaggeredGrid(cells=..., size=..., depth=...)")
+        if grid.dimensions != 2:
+            raise CaseError(f"gas.grid = {grid!r}: this solver is the 2D one; GasSolver(grid, ...) makes the 3D one")
         if not isinstance(props, GasProperties):
             raise CaseError(f"gas properties = {props!r}: must be GasProperties(...)")
         check_sides(boundaries)

@@ -32,6 +32,12 @@ geometry (the face coordinates in ``/grid``) and one ``Center="Cell"`` scalar at
 dataset. ParaView's XDMF 3 readers (Xdmf3ReaderS/T) put it in the x–y plane with the
 particles of ``particles.xdmf``. Vectors for glyphs or streamlines: Calculator
 ``ux*iHat + uy*jHat``.
+
+A 3D grid (a state with ``w``) is written the same way with a third axis: the attributes ``nz``
+and ``dz``, ``/grid`` ``z_faces`` (nz+1,) and ``z_centres`` (nz,), the fields ``uz`` and
+``superficial_uz`` besides the others, every field stored as ``(nz, ny, nx)`` (x fastest), and
+``3DRectMesh`` grids with ``VXVYVZ`` geometry, which ParaView opens as a 3D rectilinear grid
+(vectors: ``ux*iHat + uy*jHat + uz*kHat``). ``read_gas_fields`` gives (T, nx, ny, nz) arrays.
 """
 from __future__ import annotations
 
@@ -52,14 +58,18 @@ FORMAT, VERSION = "fluidem-gas", 1
 
 # Fields every snapshot holds, then the ones written when the coupling exposes them.
 FIELDS = ("voidage", "solids_fraction", "p", "rho", "ux", "uy", "superficial_ux", "superficial_uy")
+FIELDS_Z = ("uz", "superficial_uz")  # the fields of a 3D grid besides FIELDS
 OPTIONAL_FIELDS = ("solids_u", "solids_v", "beta")
+ALL_FIELDS = FIELDS + FIELDS_Z + OPTIONAL_FIELDS
 UNITS = {"voidage": "-", "solids_fraction": "-", "p": "Pa", "rho": "kg/m^3", "ux": "m/s", "uy": "m/s",
-         "superficial_ux": "m/s", "superficial_uy": "m/s", "solids_u": "m/s", "solids_v": "m/s",
+         "superficial_ux": "m/s", "superficial_uy": "m/s", "uz": "m/s", "superficial_uz": "m/s",
+         "solids_u": "m/s", "solids_v": "m/s",
          "beta": "kg/(m^3 s)"}
 
 
 def cell_fields(state, last_map=None, last_beta=None) -> dict[str, np.ndarray]:
-    """Cell-centred fields of a ``GasState``, each (nx, ny) float64 (names and units: module docstring).
+    """Cell-centred fields of a ``GasState``, each (nx, ny) float64, or (nx, ny, nz) with ``uz`` and
+    ``superficial_uz`` for a 3D state (names and units: module docstring).
 
     ``last_map`` is the coupling's last ``SolidsMap`` (``solids_u``, ``solids_v``) and
     ``last_beta`` its last β per cell; either may be None and is then left out.
@@ -77,6 +87,10 @@ def cell_fields(state, last_map=None, last_beta=None) -> dict[str, np.ndarray]:
         "superficial_ux": eps * ux,
         "superficial_uy": eps * uy,
     }
+    w = getattr(state, "w", None)
+    if w is not None:  # z-faces k and k+1 bound cell k
+        out["uz"] = 0.5 * (w[:, :, :-1] + w[:, :, 1:])
+        out["superficial_uz"] = eps * out["uz"]
     if last_map is not None:
         for name in ("solids_u", "solids_v"):
             value = getattr(last_map, name, None)
@@ -145,12 +159,13 @@ class GasFieldWriter:
                 d.attrs["units"] = UNITS[name]
             f.flush()
             g.attrs["complete"] = True
-        names = [n for n in FIELDS + OPTIONAL_FIELDS if n in fields]
+        names = [n for n in ALL_FIELDS if n in fields]
         self._index.append((key, float(sim.time), names))
         index = self._index
+        nz = getattr(grid, "nz", None)
         self._xdmf_index.append(
-            grid_text(self.path.name, key, float(sim.time), names, grid.nx, grid.ny),
-            lambda: [grid_text(self.path.name, k, t, ns, grid.nx, grid.ny) for k, t, ns in index])
+            grid_text(self.path.name, key, float(sim.time), names, grid.nx, grid.ny, nz),
+            lambda: [grid_text(self.path.name, k, t, ns, grid.nx, grid.ny, nz) for k, t, ns in index])
 
     def _load_index(self, f: h5py.File) -> None:
         """The index of the complete snapshots in ``f`` and the key after its last group (complete or not)."""
@@ -175,14 +190,15 @@ class GasFieldWriter:
                 self._load_index(f)
                 index = self._index
                 nx, ny = (int(f.attrs["nx"]), int(f.attrs["ny"])) if "nx" in f.attrs else (0, 0)
+                nz = int(f.attrs["nz"]) if "nz" in f.attrs else None
         except (OSError, KeyError) as err:
             aside = self.path.with_name(self.path.name + ".unreadable")
             os.replace(self.path, aside)
             warnings.warn(f"{self.path} could not be read on resume ({err}); moved to {aside.name}, "
                           f"gas fields start again from this step", RuntimeWarning, stacklevel=2)
-            index, nx, ny = [], 0, 0
+            index, nx, ny, nz = [], 0, 0, None
             self._index, self._next_key = None, 0  # the new file's, on the next snapshot
-        write_text_atomic(self.xdmf, xdmf_text(self.path.name, index, nx, ny))
+        write_text_atomic(self.xdmf, xdmf_text(self.path.name, index, nx, ny, nz))
         self._xdmf_index.forget()
 
     def finalize(self, sim) -> None:
@@ -194,24 +210,29 @@ class GasFieldWriter:
             with h5py.File(self.path, "r") as f:
                 index = _index(f)
                 nx, ny = int(f.attrs.get("nx", 0)), int(f.attrs.get("ny", 0))
+                nz = int(f.attrs["nz"]) if "nz" in f.attrs else None
         except (OSError, KeyError):
             return
-        write_text_atomic(self.xdmf, xdmf_text(self.path.name, index, nx, ny))  # durable: the run's last
+        write_text_atomic(self.xdmf, xdmf_text(self.path.name, index, nx, ny, nz))  # durable: the run's last
         self._xdmf_index.forget()
 
 
 def _write_grid(f: h5py.File, grid) -> None:
     """File attributes and ``/grid`` on the first snapshot; later ones must have the same grid."""
     if "grid" in f:
-        if (int(f.attrs["nx"]), int(f.attrs["ny"])) != tuple(grid.shape):
-            raise ValueError(f"{f.filename} holds a {f.attrs['nx']} x {f.attrs['ny']} grid; "
-                             f"this run's is {grid.nx} x {grid.ny}")
+        held = tuple(int(f.attrs[k]) for k in ("nx", "ny", "nz") if k in f.attrs)
+        if held != tuple(grid.shape):
+            raise ValueError(f"{f.filename} holds a {' x '.join(map(str, held))} grid; "
+                             f"this run's is {' x '.join(map(str, grid.shape))}")
         return
     f.attrs.update(format=FORMAT, version=VERSION, nx=grid.nx, ny=grid.ny, dx=grid.dx, dy=grid.dy,
                    depth=grid.depth, layout="(ny, nx): row j is y, x varies fastest")
     g = f.create_group("grid")
     g["x_faces"], g["y_faces"] = grid.x_faces, grid.y_faces
     g["x_centres"], g["y_centres"] = grid.x_centres, grid.y_centres
+    if getattr(grid, "dimensions", 2) == 3:
+        f.attrs.update(nz=grid.nz, dz=grid.dz, layout="(nz, ny, nx): x varies fastest, then y")
+        g["z_faces"], g["z_centres"] = grid.z_faces, grid.z_centres
 
 
 def _index(f: h5py.File) -> list[tuple[str, float, list[str]]]:
@@ -223,35 +244,39 @@ def _index(f: h5py.File) -> list[tuple[str, float, list[str]]]:
     for k in sorted(grp):
         g = grp[k]
         if g.attrs.get("complete", False):
-            out.append((k, float(g.attrs["time"]), [n for n in FIELDS + OPTIONAL_FIELDS if n in g]))
+            out.append((k, float(g.attrs["time"]), [n for n in ALL_FIELDS if n in g]))
     return out
 
 
-def grid_text(h5name: str, key: str, t: float, names: list[str], nx: int, ny: int) -> str:
-    """The XDMF ``<Grid>`` element of one snapshot with the fields ``names`` (``xdmf_text`` joins them)."""
+def grid_text(h5name: str, key: str, t: float, names: list[str], nx: int, ny: int, nz: int | None = None) -> str:
+    """The XDMF ``<Grid>`` element of one snapshot with the fields ``names`` (``xdmf_text`` joins them): a
+    2DRectMesh, or with ``nz`` a 3DRectMesh."""
+    cells = f"{ny} {nx}" if nz is None else f"{nz} {ny} {nx}"
     attrs = [
         f'      <Attribute Name="{name}" AttributeType="Scalar" Center="Cell">\n'
-        f'        <DataItem Dimensions="{ny} {nx}" NumberType="Float" Precision="8" Format="HDF">'
+        f'        <DataItem Dimensions="{cells}" NumberType="Float" Precision="8" Format="HDF">'
         f"{h5name}:/snapshots/{key}/{name}</DataItem>\n      </Attribute>"
         for name in names
     ]
+    axes = [("x", nx), ("y", ny)] + ([] if nz is None else [("z", nz)])
+    topology = (f'      <Topology TopologyType="2DRectMesh" Dimensions="{ny + 1} {nx + 1}"/>\n' if nz is None else
+                f'      <Topology TopologyType="3DRectMesh" Dimensions="{nz + 1} {ny + 1} {nx + 1}"/>\n')
     return (
         f'    <Grid Name="gas_{key}" GridType="Uniform">\n'
         f'      <Time Value="{t:.9g}"/>\n'
-        f'      <Topology TopologyType="2DRectMesh" Dimensions="{ny + 1} {nx + 1}"/>\n'
-        f'      <Geometry GeometryType="VXVY">\n'
-        f'        <DataItem Dimensions="{nx + 1}" NumberType="Float" Precision="8" Format="HDF">'
-        f"{h5name}:/grid/x_faces</DataItem>\n"
-        f'        <DataItem Dimensions="{ny + 1}" NumberType="Float" Precision="8" Format="HDF">'
-        f"{h5name}:/grid/y_faces</DataItem>\n      </Geometry>\n"
+        + topology
+        + f'      <Geometry GeometryType="{"VXVY" if nz is None else "VXVYVZ"}">\n'
+        + "".join(f'        <DataItem Dimensions="{n + 1}" NumberType="Float" Precision="8" Format="HDF">'
+                  f"{h5name}:/grid/{a}_faces</DataItem>\n" for a, n in axes)
+        + "      </Geometry>\n"
         + "\n".join(attrs)
         + "\n    </Grid>"
     )
 
 
-def xdmf_text(h5name: str, index: list[tuple[str, float, list[str]]], nx: int, ny: int) -> str:
-    """XDMF 3 temporal collection of 2DRectMesh grids, one per snapshot in ``index``."""
-    return document("gas", [grid_text(h5name, key, t, names, nx, ny) for key, t, names in index])
+def xdmf_text(h5name: str, index: list[tuple[str, float, list[str]]], nx: int, ny: int, nz: int | None = None) -> str:
+    """XDMF 3 temporal collection of 2DRectMesh (3DRectMesh with ``nz``) grids, one per snapshot in ``index``."""
+    return document("gas", [grid_text(h5name, key, t, names, nx, ny, nz) for key, t, names in index])
 
 
 def _gas_file(run_dir: str | Path) -> Path:
@@ -267,15 +292,18 @@ def _gas_file(run_dir: str | Path) -> Path:
 
 def read_gas_grid(run_dir: str | Path) -> dict[str, float]:
     """The grid of a run's ``gas.h5`` from its file attributes: ``nx``, ``ny`` (int), ``dx``, ``dy`` [m] and
-    ``depth`` [m] (1.0 when the file does not give it).
+    ``depth`` [m] (1.0 when the file does not give it); of a 3D grid also ``nz`` (int) and ``dz`` [m].
 
     ``run_dir`` is a run directory or the file. Raises ``FileNotFoundError`` without a file, ``OSError``
     when HDF5 cannot open it and ``KeyError`` when it lacks an attribute.
     """
     with h5py.File(_gas_file(run_dir), "r") as f:
         a = f.attrs
-        return {"nx": int(a["nx"]), "ny": int(a["ny"]), "dx": float(a["dx"]), "dy": float(a["dy"]),
-                "depth": float(a.get("depth", 1.0))}
+        out = {"nx": int(a["nx"]), "ny": int(a["ny"]), "dx": float(a["dx"]), "dy": float(a["dy"]),
+               "depth": float(a.get("depth", 1.0))}
+        if "nz" in a:
+            out.update(nz=int(a["nz"]), dz=float(a["dz"]))
+        return out
 
 
 def read_gas_fields(run_dir: str | Path, fields=None) -> dict[str, np.ndarray]:
@@ -290,7 +318,8 @@ def read_gas_fields(run_dir: str | Path, fields=None) -> dict[str, np.ndarray]:
     -------
     dict with ``time`` (T,) [s], ``step`` (T,) int, ``x``/``y`` cell centres (nx,)/(ny,) [m],
     ``x_faces``/``y_faces`` (nx+1,)/(ny+1,) [m], and each field as (T, nx, ny) float64
-    (``field[k, i, j]`` is cell (i, j) at ``time[k]``; NaN in a snapshot without it).
+    (``field[k, i, j]`` is cell (i, j) at ``time[k]``; NaN in a snapshot without it). A 3D grid adds
+    ``z``, ``z_faces`` and gives the fields as (T, nx, ny, nz).
     Only completely written snapshots are read. Raises ``FileNotFoundError`` without a file.
 
     Examples
@@ -308,22 +337,25 @@ def read_gas_fields(run_dir: str | Path, fields=None) -> dict[str, np.ndarray]:
             "x": np.asarray(gridg["x_centres"]), "y": np.asarray(gridg["y_centres"]),
             "x_faces": np.asarray(gridg["x_faces"]), "y_faces": np.asarray(gridg["y_faces"]),
         }
-        nx, ny = len(out["x"]), len(out["y"])
+        shape = (len(out["x"]), len(out["y"]))
+        if "z_centres" in gridg:
+            out["z"], out["z_faces"] = np.asarray(gridg["z_centres"]), np.asarray(gridg["z_faces"])
+            shape += (len(out["z"]),)
         index = _index(f)
-        present = [n for n in FIELDS + OPTIONAL_FIELDS if any(n in names for _, _, names in index)]
+        present = [n for n in ALL_FIELDS if any(n in names for _, _, names in index)]
         if fields is None:
             names = present
         else:
             names = list(fields)
-            unknown = [n for n in names if n not in FIELDS + OPTIONAL_FIELDS]
+            unknown = [n for n in names if n not in ALL_FIELDS]
             if unknown:
-                raise KeyError(f"unknown gas field(s) {unknown}; the fields are {list(FIELDS + OPTIONAL_FIELDS)}")
+                raise KeyError(f"unknown gas field(s) {unknown}; the fields are {list(ALL_FIELDS)}")
         grp = f["snapshots"] if index else None
         out["time"] = np.array([t for _, t, _ in index], float)
         out["step"] = np.array([int(grp[k].attrs["step"]) for k, _, _ in index], np.int64) if index \
             else np.zeros(0, np.int64)
         for name in names:
-            stack = np.full((len(index), nx, ny), np.nan)
+            stack = np.full((len(index),) + shape, np.nan)
             for k, (key, _, have) in enumerate(index):
                 if name in have:
                     stack[k] = np.asarray(grp[key][name]).T

@@ -16,7 +16,6 @@ what the GPU engine does not do for a case.
 from __future__ import annotations
 
 import logging
-import math
 from dataclasses import fields
 
 import numpy as np

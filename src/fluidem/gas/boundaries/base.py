@@ -1,6 +1,7 @@
 """The base of the gas boundary conditions, their registry, and the time-dependent values they take.
 
-A condition is a small pydantic model on a named side (``left``, ``right``, ``bottom``, ``top``), chosen by its
+A condition is a small pydantic model on a named side (``left``, ``right``, ``bottom``, ``top``; on a 3D grid
+also ``front`` and ``back``, the z sides), chosen by its
 ``kind`` in a case file or built in Python (``Wall()``, ``Inflow(superficial=1.8, voidage=0.4)``): the same
 object either way. It carries the integer ``flag`` of Hoomans 1996 Table 1 that ``StaggeredGrid.cell_flags``
 writes into the ring of boundary cells, and answers the solver's three questions, each evaluated at set-up
@@ -8,7 +9,10 @@ or once per gas step, never inside a kernel:
 
 ``face_velocity(side, edges)``
     the interstitial normal velocity it prescribes on each boundary face of its side, positive into the
-    domain, as a function of time (None: it prescribes none);
+    domain, as a function of time (None: it prescribes none). On a 2D grid ``edges`` is the (n + 1,) array
+    of face edges along the side and the velocity an (n,) array; on a 3D grid ``edges`` is the pair of such
+    arrays along the side's two in-plane axes (``StaggeredGrid.side_axes``) and the velocity an
+    (n_a, n_b) array over the side's faces;
 ``prescribed_pressure(t)``
     the pressure it holds in its boundary cells [Pa] (None: the gas's ``reference_pressure``);
 ``fastest_inflow()``
@@ -16,7 +20,8 @@ or once per gas step, never inside a kernel:
 
 Sign convention: inflow velocities are positive *into* the domain on every side.
 Positions along a side are the x coordinate on the bottom and top sides and the y coordinate on the
-left and right sides [m]. A new condition is one file in this package whose class registers itself
+left and right sides [m]; on a 3D grid a side's in-plane coordinates are (y, z) on left/right, (x, z) on
+bottom/top and (x, y) on front/back. A new condition is one file in this package whose class registers itself
 with ``@boundary_conditions.register("kind")`` and sets ``kind`` and ``flag``; the case schema builds
 its choice of kinds from the registry.
 """
@@ -184,9 +189,10 @@ class BoundaryCondition(Model):
     # the test that checks this condition against an analytic result (a function name under tests/)
     reference_test: ClassVar[str] = ""
 
-    def face_velocity(self, side: str, edges: np.ndarray) -> Callable[[float], np.ndarray] | None:
+    def face_velocity(self, side: str, edges) -> Callable[[float], np.ndarray] | None:
         """t ↦ (n_faces,) interstitial normal velocity [m/s] on the boundary faces of ``side``, positive into
-        the domain, for the face edges ``edges`` [m] along the side; None if the condition prescribes none."""
+        the domain, for the face edges ``edges`` [m] along the side; None if the condition prescribes none.
+        3D grid: ``edges`` is a pair of edge arrays (the side's two in-plane axes) and the velocity (n_a, n_b)."""
         return None
 
     def prescribed_pressure(self, t: float) -> float | None:

@@ -1,0 +1,133 @@
+"""Milliseconds per step of the 3D gas solver (``GasSolver.advance`` on a 3D grid alone), 1e4 to 1e6 cells.
+
+    python benchmarks/gas3d_step.py                                   # 20x25x20, 40x60x40 (1e4, 1e5 cells)
+    python benchmarks/gas3d_step.py --grids 100x100x100 --repeat 1 --seconds 1 --warmup 2     # 1e6 cells
+    python benchmarks/gas3d_step.py --grids 20x25x20 --linear-solver multigrid,superlu --repeat 3
+    python benchmarks/gas3d_step.py --grids 10x12x10 --seconds 0.2 --repeat 1                 # a quick check
+
+Problem ``NXxNYxNZ``: a 3D bubbling bed, 0.2 m x 0.4 m x 0.2 m (y up), ideal gas, inflow at the bottom
+through influx cells of voidage 0.4: 0.6 m/s superficial background and a central circular jet of
+radius 1 cm at 20 m/s interstitial; a pressure outlet on top, no-slip walls on the four other sides; a bed
+of voidage 0.42 below 0.15 m with a surface wave and a rising bubble (the voidage moves every step), and
+Ergun's β (Hoomans 1996 eq. 45, d_p = 2 mm) from the gas every step where the voidage is below 0.8;
+dt = min(1e-4 s, 0.5 h_min / 20 m/s).
+
+``--linear-solver``: the ``GasSolver`` option ("auto", the default choice, "multigrid" or "superlu"); a
+comma-separated list makes them the variants of each grid's rounds. Each round, for each grid, times every
+solver once on a fresh solver: ``--warmup`` steps are not timed, then ``advance`` alone for ``--seconds``
+(at least 3 steps). Printed per grid and solver: wall milliseconds per step (min, median, max over the
+rounds), the median CPU milliseconds, pressure corrections and GMRES iterations per step.
+"""
+from __future__ import annotations
+
+import argparse
+import time
+
+import harness  # benchmarks/harness.py: this script's folder is first on sys.path
+import numpy as np
+
+
+def bed_problem(nx: int, ny: int, nz: int, linear_solver: str = "auto"):
+    """The 3D bubbling bed on an nx x ny x nz grid: (solver, state, step_args, dt)."""
+    from fluidem.gas import (
+        Circle,
+        GasProperties,
+        GasSolver,
+        Inflow,
+        PressureOutlet,
+        StaggeredGrid,
+        Wall,
+    )
+
+    L, H = 0.2, 0.4
+    grid = StaggeredGrid(cells=(nx, ny, nz), size=(L, H, L))
+    props = GasProperties()
+    bcs = {s: Wall() for s in grid.sides}
+    bcs.update(top=PressureOutlet(), bottom=Inflow(
+        superficial=0.6, voidage=0.4, patches=[Circle(centre=(0.5 * L, 0.5 * L), radius=0.01, interstitial=20.0)]))
+    solver = GasSolver(grid, props, bcs, linear_solver=linear_solver)
+    X, Y, Z = grid.centres()
+    d_p, mu = 2e-3, props.viscosity
+
+    def voidage_at(t):
+        surface = 0.15 + 0.01 * np.sin(2 * np.pi * (X / L - t / 0.2)) * np.cos(2 * np.pi * Z / L)
+        bed = 0.42 + 0.58 / (1.0 + np.exp(-(Y - surface) / 0.01))
+        r = np.sqrt((X - 0.5 * L) ** 2 + (Y - (0.03 + 0.5 * t) % 0.12) ** 2 + (Z - 0.5 * L) ** 2)
+        return np.clip(bed + 0.45 / (1.0 + np.exp((r - 0.02) / 0.005)), 0.42, 1.0)
+
+    def step_args(st, t, dt):
+        eps = voidage_at(t + dt)
+        uc = 0.5 * (st.u[1:] + st.u[:-1])
+        vc = 0.5 * (st.v[:, 1:] + st.v[:, :-1])
+        wc = 0.5 * (st.w[:, :, 1:] + st.w[:, :, :-1])
+        slip = np.sqrt(uc**2 + vc**2 + wc**2)
+        ergun = 150.0 * (1 - eps) ** 2 / eps * mu / d_p**2 + 1.75 * (1 - eps) * st.rho / d_p * slip  # eq. 45
+        return {"voidage": eps, "beta": np.where(eps < 0.8, ergun, 0.0), "solids_u": 0.0, "solids_v": 0.0,
+                "solids_w": 0.0}
+
+    state = solver.initial_state(voidage=voidage_at(0.0))
+    dt = min(1e-4, 0.5 * min(grid.spacing) / 20.0)
+    return solver, state, step_args, dt
+
+
+def time_one(grid: str, seconds: float, warmup: int, linear_solver: str = "auto") -> dict:
+    """A fresh solver on ``grid`` ("NXxNYxNZ"): wall ms per step (``value``) and the other figures of one timing."""
+    nx, ny, nz = (int(k) for k in grid.split("x"))
+    solver, state, step_args, dt = bed_problem(nx, ny, nz, linear_solver)
+    t = 0.0
+    for _ in range(warmup):
+        solver.advance(state, dt, t, **step_args(state, t, dt))
+        t += dt
+    n = its = 0
+    elapsed = cpu = 0.0
+    kry0 = solver.krylov_iterations
+    wall0 = time.perf_counter()
+    while (time.perf_counter() - wall0 < seconds or n < 3) and n < 100000:
+        kw = step_args(state, t, dt)  # the coupling's work, not timed
+        c0, t0 = time.process_time(), time.perf_counter()
+        info = solver.advance(state, dt, t, **kw)
+        elapsed += time.perf_counter() - t0
+        cpu += time.process_time() - c0
+        t += dt
+        n += 1
+        its += info.iterations
+    return {"value": 1e3 * elapsed / n, "cpu_ms": 1e3 * cpu / n, "steps": n, "iterations_per_step": its / n,
+            "krylov_per_step": (solver.krylov_iterations - kry0) / n, "solver": solver.linear_solver,
+            "cells": nx * ny * nz}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--grids", default="20x25x20,40x60x40")
+    ap.add_argument("--seconds", type=float, default=2.0, help="timed wall seconds of each solver in each round")
+    ap.add_argument("--warmup", type=int, default=10, help="untimed steps of a fresh solver")
+    ap.add_argument("--linear-solver", default="auto",
+                    help="GasSolver linear_solver: auto, multigrid, superlu; a comma-separated list times each")
+    harness.add_options(ap, repeat=3)
+    a = ap.parse_args(argv)
+    import fluidem
+
+    print(f"fluidem from {fluidem.__file__}")
+    solvers = [s for s in a.linear_solver.split(",") if s]
+    measurements, rows, ratio_lines = {}, [], []
+    for grid in [g for g in a.grids.split(",") if g]:
+        variants = {s: (lambda s=s, g=grid: time_one(g, a.seconds, a.warmup, s)) for s in solvers}
+        rounds = harness.run_rounds(variants, a.repeat, unit="ms")
+        measurements[grid] = rounds
+        for s in solvers:
+            w = rounds.stats(s)
+            ex = rounds.extras[s][0]
+            rows.append([grid, ex["cells"], ex["solver"], w["n"], w["min"], w["median"], w["max"],
+                         rounds.stats(s, "cpu_ms")["median"], rounds.stats(s, "iterations_per_step")["median"],
+                         rounds.stats(s, "krylov_per_step")["median"], int(sum(e["steps"] for e in rounds.extras[s]))])
+        ratio_lines += [f"{grid}: " + rounds.ratio_line(s, solvers[0]) for s in solvers[1:]]
+    print(harness.format_table(["grid", "cells", "solver", "rounds", "wall ms/step min", "median", "max", "cpu ms/step",
+                                "it/step", "gmres/step", "steps"], rows))
+    for line in ratio_lines:
+        print(line)
+    harness.write_json(a.json, measurements, seconds=a.seconds, warmup=a.warmup, linear_solvers=solvers)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

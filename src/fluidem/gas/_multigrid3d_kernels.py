@@ -1,0 +1,313 @@
+"""Compiled GMRES preconditioned by a geometric aggregation multigrid, for the 7-point matrices of a
+box grid (optionally periodic along any axis): the 3D sibling of ``_multigrid_kernels.py``.
+
+``mg_setup`` makes the hierarchy of a matrix given in CSC form (its entries mapped to grid rows by the
+caller, once per pattern: ``_multigrid3d.py``), ``gmres`` solves A x = b with one V-cycle
+(``mg_vcycle``) as right preconditioner. Nothing here knows the equations behind the matrix; the caller
+owns every array.
+
+Hierarchy: 2 × 2 × 2 cells per coarse cell (1 along an axis already one cell thick), piecewise-constant
+prolongation P, coarse matrices Pᵀ A P, which stay 7-point, with the coupling along each axis divided by
+that axis's aggregation factor and the row sums kept (see ``_mg_level_matrix``); symmetric Gauss-Seidel
+smoothing (a forward and a backward sweep) before and after the coarse correction; dense LU on the
+coarsest level. Layout, all levels concatenated (level l holds cells MGL[0, l] .. MGL[0, l + 1] - 1):
+
+  MGL (7, levels + 1) int64: cell offsets; the grid size (a, b, c) of each level (cell (i b + j) c + k);
+      the aggregation factors (rx, ry, rz) from level l to level l + 1
+  MGI (N, 13) int64: per cell its 6 neighbours (-x, +x, -y, +y, -z, +z; local index, -1 none), the
+      Galerkin target of each of those 6 entries in MGA (flat index row * 7 + slot, slot 0 the diagonal;
+      -1 none), and the coarse cell (local index) of this cell
+  MGA (N, 7): matrix rows (diagonal, then the 6 neighbour coefficients)
+  MGW (4, N): x, b, r, 1 / diagonal
+  DLU (m, m) + PIV (m): dense LU of the coarsest level, partial pivoting
+  KRY (2 (restart + 1), n): GMRES basis V and preconditioned vectors Z
+  HES (restart + 4, restart + 1): Hessenberg matrix, then rows of Givens cosines, sines, rhs
+"""
+import numpy as np
+from numba import njit
+
+MG_X, MG_B, MG_R, MG_IDIAG = 0, 1, 2, 3
+MGI_NB, MGI_GAL, MGI_AGG = 0, 6, 12
+NS = 7  # slots of a matrix row
+
+
+@njit(cache=True, error_model="numpy")
+def _mg_level_matrix(MGL, MGI, MGA, MGW, l):
+    """Coarse matrix of level l + 1 from that of level l (also 1 / diagonal of level l + 1)."""
+    o0, o1, o2 = MGL[0, l], MGL[0, l + 1], MGL[0, l + 2]
+    flat = MGA.reshape(MGA.size)
+    for g in range(o1, o2):
+        for s in range(NS):
+            MGA[g, s] = 0.0
+    for g in range(o0, o1):
+        flat[(o1 + MGI[g, MGI_AGG]) * NS] += MGA[g, 0]
+        for d in range(6):
+            t = MGI[g, MGI_GAL + d]
+            if t >= 0:
+                flat[t] += MGA[g, 1 + d]
+    # Pᵀ A P multiplies the coupling along an axis of a diffusion operator by that axis's aggregation
+    # factor against its discretisation on the coarse grid (r_b r_c fine faces per coarse face, the ratio
+    # area / distance r_b r_c / r_a); its row sums (the compressibility, the boundaries) are right:
+    # divide the couplings, keep the row sums
+    for g in range(o1, o2):
+        rs = 0.0
+        for s in range(NS):
+            rs += MGA[g, s]
+        off = 0.0
+        for d in range(6):
+            MGA[g, 1 + d] /= MGL[4 + d // 2, l]
+            off += MGA[g, 1 + d]
+        MGA[g, 0] = rs - off
+        MGW[MG_IDIAG, g] = 1.0 / MGA[g, 0]
+
+
+@njit(cache=True, error_model="numpy")
+def mg_setup(data, csc_ell, MGL, MGI, MGA, MGW, DLU, PIV):
+    """The multigrid hierarchy of the CSC matrix ``data`` (its entries go to MGA rows by ``csc_ell``: flat
+    index cell * 7 + slot); returns False if a diagonal or the coarsest LU is singular."""
+    levels = MGL.shape[1] - 1
+    n0 = MGL[0, 1]
+    flat = MGA.reshape(MGA.size)
+    for g in range(n0):
+        for s in range(NS):
+            MGA[g, s] = 0.0
+    for q in range(data.size):
+        flat[csc_ell[q]] += data[q]
+    for g in range(n0):
+        if MGA[g, 0] == 0.0:
+            return False
+        MGW[MG_IDIAG, g] = 1.0 / MGA[g, 0]
+    for l in range(levels - 1):
+        _mg_level_matrix(MGL, MGI, MGA, MGW, l)
+        for g in range(MGL[0, l + 1], MGL[0, l + 2]):
+            if not np.isfinite(MGW[MG_IDIAG, g]):
+                return False
+    oc = MGL[0, levels - 1]
+    m = MGL[0, levels] - oc
+    for i in range(m):
+        for j in range(m):
+            DLU[i, j] = 0.0
+    for i in range(m):
+        g = oc + i
+        DLU[i, i] += MGA[g, 0]
+        for d in range(6):
+            c = MGI[g, MGI_NB + d]
+            if c >= 0:
+                DLU[i, c] += MGA[g, 1 + d]
+    for k in range(m):
+        p = k
+        big = abs(DLU[k, k])
+        for i in range(k + 1, m):
+            if abs(DLU[i, k]) > big:
+                big = abs(DLU[i, k])
+                p = i
+        PIV[k] = p
+        if big == 0.0:
+            return False
+        if p != k:
+            for j in range(m):
+                tmp = DLU[k, j]
+                DLU[k, j] = DLU[p, j]
+                DLU[p, j] = tmp
+        inv = 1.0 / DLU[k, k]
+        for i in range(k + 1, m):
+            lik = DLU[i, k] * inv
+            DLU[i, k] = lik
+            if lik != 0.0:
+                for j in range(k + 1, m):
+                    DLU[i, j] -= lik * DLU[k, j]
+    return True
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _mg_row(MGI, MGA, X, o0, sa, sb, g, edge):
+    """Σ_d A[g, d] x[neighbour d] of cell g (local neighbours from MGI on the faces of the level's box,
+    else g ∓ sa, g ∓ sb, g ∓ 1 with sa = b c, sb = c)."""
+    if edge:
+        s = 0.0
+        for d in range(6):
+            c = MGI[g, MGI_NB + d]
+            if c >= 0:
+                s += MGA[g, 1 + d] * X[o0 + c]
+        return s
+    return (MGA[g, 1] * X[g - sa] + MGA[g, 2] * X[g + sa] + MGA[g, 3] * X[g - sb] + MGA[g, 4] * X[g + sb]
+            + MGA[g, 5] * X[g - 1] + MGA[g, 6] * X[g + 1])
+
+
+@njit(cache=True, error_model="numpy")
+def _mg_gauss_seidel(MGL, MGI, MGA, MGW, l, forward):
+    """One Gauss-Seidel sweep of level l (cells in index order, forward or backward)."""
+    X, B, IDG = MGW[MG_X], MGW[MG_B], MGW[MG_IDIAG]
+    o0, a, b, c = MGL[0, l], MGL[1, l], MGL[2, l], MGL[3, l]
+    sa, sb = b * c, c
+    for ii in range(a):
+        i = ii if forward else a - 1 - ii
+        edge_i = i == 0 or i == a - 1
+        for jj in range(b):
+            j = jj if forward else b - 1 - jj
+            edge_ij = edge_i or j == 0 or j == b - 1
+            for kk in range(c):
+                k = kk if forward else c - 1 - kk
+                g = o0 + (i * b + j) * c + k
+                X[g] = (B[g] - _mg_row(MGI, MGA, X, o0, sa, sb, g, edge_ij or k == 0 or k == c - 1)) * IDG[g]
+
+
+@njit(cache=True, error_model="numpy")
+def _mg_restrict_residual(MGL, MGI, MGA, MGW, l):
+    """b of level l + 1 = Pᵀ (b - A x) of level l."""
+    X, B = MGW[MG_X], MGW[MG_B]
+    o0, a, b, c = MGL[0, l], MGL[1, l], MGL[2, l], MGL[3, l]
+    sa, sb = b * c, c
+    o1, o2 = MGL[0, l + 1], MGL[0, l + 2]
+    for g in range(o1, o2):
+        B[g] = 0.0
+    for i in range(a):
+        edge_i = i == 0 or i == a - 1
+        for j in range(b):
+            edge_ij = edge_i or j == 0 or j == b - 1
+            for k in range(c):
+                g = o0 + (i * b + j) * c + k
+                r = B[g] - MGA[g, 0] * X[g] - _mg_row(MGI, MGA, X, o0, sa, sb, g, edge_ij or k == 0 or k == c - 1)
+                B[o1 + MGI[g, MGI_AGG]] += r
+
+
+@njit(cache=True, error_model="numpy")
+def mg_vcycle(MGL, MGI, MGA, MGW, DLU, PIV, b, x):
+    """x ≈ A^-1 b by one V-cycle (a fixed linear operator: the preconditioner of ``gmres``)."""
+    levels = MGL.shape[1] - 1
+    X, B = MGW[MG_X], MGW[MG_B]
+    n0 = MGL[0, 1]
+    for g in range(n0):
+        B[g] = b[g]
+    for l in range(levels - 1):
+        o0, o1 = MGL[0, l], MGL[0, l + 1]
+        for g in range(o0, o1):
+            X[g] = 0.0
+        _mg_gauss_seidel(MGL, MGI, MGA, MGW, l, True)
+        _mg_gauss_seidel(MGL, MGI, MGA, MGW, l, False)
+        _mg_restrict_residual(MGL, MGI, MGA, MGW, l)
+    oc = MGL[0, levels - 1]
+    m = MGL[0, levels] - oc
+    for i in range(m):  # coarsest: forward / back substitution with the pivots
+        X[oc + i] = B[oc + i]
+    for k in range(m):
+        p = PIV[k]
+        if p != k:
+            tmp = X[oc + k]
+            X[oc + k] = X[oc + p]
+            X[oc + p] = tmp
+        xk = X[oc + k]
+        for i in range(k + 1, m):
+            X[oc + i] -= DLU[i, k] * xk
+    for k in range(m - 1, -1, -1):
+        s = X[oc + k]
+        for j in range(k + 1, m):
+            s -= DLU[k, j] * X[oc + j]
+        X[oc + k] = s / DLU[k, k]
+    for l in range(levels - 2, -1, -1):
+        o0, o1 = MGL[0, l], MGL[0, l + 1]
+        for g in range(o0, o1):
+            X[g] += X[o1 + MGI[g, MGI_AGG]]
+        _mg_gauss_seidel(MGL, MGI, MGA, MGW, l, False)
+        _mg_gauss_seidel(MGL, MGI, MGA, MGW, l, True)
+    for g in range(n0):
+        x[g] = X[g]
+
+
+@njit(cache=True, error_model="numpy")
+def mg_matvec(MGL, MGI, MGA, x, y):
+    """y = A x with the finest level of the hierarchy."""
+    a, b, c = MGL[1, 0], MGL[2, 0], MGL[3, 0]
+    sa, sb = b * c, c
+    for i in range(a):
+        edge_i = i == 0 or i == a - 1
+        for j in range(b):
+            edge_ij = edge_i or j == 0 or j == b - 1
+            for k in range(c):
+                g = (i * b + j) * c + k
+                y[g] = MGA[g, 0] * x[g] + _mg_row(MGI, MGA, x, 0, sa, sb, g, edge_ij or k == 0 or k == c - 1)
+
+
+@njit(cache=True, error_model="numpy")
+def gmres(MGL, MGI, MGA, MGW, DLU, PIV, KRY, HES, b, x, target, max_iter):
+    """x ≈ A^-1 b by restarted GMRES with the V-cycle as right preconditioner, from x = 0, until
+    ||b - A x||_2 <= target. Returns the iterations made, or -1 when ``max_iter`` were not enough."""
+    n = b.size
+    m = HES.shape[1] - 1
+    Vb = KRY[: m + 1]
+    Zb = KRY[m + 1:]
+    Hh = HES[: m + 1]
+    cs, sn, gv = HES[m + 1], HES[m + 2], HES[m + 3]
+    for i in range(n):
+        x[i] = 0.0
+    r = Vb[0]
+    for i in range(n):
+        r[i] = b[i]
+    its = 0
+    while True:
+        beta = 0.0
+        for i in range(n):
+            beta += r[i] * r[i]
+        beta = np.sqrt(beta)
+        if beta <= target:
+            return its
+        if its >= max_iter:
+            return -1
+        v0 = Vb[0]
+        for i in range(n):
+            v0[i] = r[i] / beta
+        for k in range(m + 1):
+            gv[k] = 0.0
+        gv[0] = beta
+        k_used = 0
+        for k in range(m):
+            mg_vcycle(MGL, MGI, MGA, MGW, DLU, PIV, Vb[k], Zb[k])
+            w = Vb[k + 1]
+            mg_matvec(MGL, MGI, MGA, Zb[k], w)
+            for jj in range(k + 1):  # modified Gram-Schmidt
+                vj = Vb[jj]
+                hsum = 0.0
+                for i in range(n):
+                    hsum += w[i] * vj[i]
+                Hh[jj, k] = hsum
+                for i in range(n):
+                    w[i] -= hsum * vj[i]
+            hn = 0.0
+            for i in range(n):
+                hn += w[i] * w[i]
+            hn = np.sqrt(hn)
+            Hh[k + 1, k] = hn
+            if hn > 0.0:
+                for i in range(n):
+                    w[i] /= hn
+            for jj in range(k):  # earlier rotations
+                h0, h1 = Hh[jj, k], Hh[jj + 1, k]
+                Hh[jj, k] = cs[jj] * h0 + sn[jj] * h1
+                Hh[jj + 1, k] = -sn[jj] * h0 + cs[jj] * h1
+            h0, h1 = Hh[k, k], Hh[k + 1, k]
+            den = np.sqrt(h0 * h0 + h1 * h1)
+            if den == 0.0:
+                cs[k], sn[k] = 1.0, 0.0
+            else:
+                cs[k], sn[k] = h0 / den, h1 / den
+            Hh[k, k] = den
+            Hh[k + 1, k] = 0.0
+            gv[k + 1] = -sn[k] * gv[k]
+            gv[k] = cs[k] * gv[k]
+            its += 1
+            k_used = k + 1
+            if abs(gv[k + 1]) <= target or its >= max_iter or hn == 0.0:
+                break
+        for jj in range(k_used - 1, -1, -1):  # y = H^-1 g, x += Z y
+            s = gv[jj]
+            for q in range(jj + 1, k_used):
+                s -= Hh[jj, q] * gv[q]
+            gv[jj] = s / Hh[jj, jj]
+        for jj in range(k_used):
+            z = Zb[jj]
+            y = gv[jj]
+            for i in range(n):
+                x[i] += y * z[i]
+        mg_matvec(MGL, MGI, MGA, x, r)  # true residual for the restart test
+        for i in range(n):
+            r[i] = b[i] - r[i]

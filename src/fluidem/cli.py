@@ -85,7 +85,24 @@ def cmd_run(args) -> int:
                   "free the space or fix the folder, then: fluidem run --resume %s", sim.time, err, out, out)
         return 1
     print(summary_json(summary), end="")
+    sys.stdout.flush()
+    log.info("%s", _next_steps(out, summary))
     return 0
+
+
+def _next_steps(out: Path, summary: dict) -> str:
+    """The closing lines of a run on stderr: where its outputs are and what to do with them."""
+    files = [name for name in ("summary.json", "probes.csv", "particles.xdmf", "gas.xdmf", "restart.h5")
+             if (out / name).exists()]
+    wall = summary.get("wall_time_s")
+    lines = [f"{summary.get('status', 'done')}: t = {summary.get('sim_time_s', 0.0):.6g} s"
+             + (f" in {wall:.1f} s of wall time" if wall is not None else "") + f"; outputs in {out}/: "
+             + ", ".join(files) + " (the .xdmf files open in ParaView, probes.csv in pandas)",
+             f"  fluidem plot {out}      # figures of the run",
+             f"  fluidem report {out}    # one HTML page with the figures and the summary"]
+    if summary.get("status") == "stopped":
+        lines.append(f"  fluidem run --resume {out}    # continue to the case's time.end")
+    return "\n".join(lines)
 
 
 def cmd_cases(args) -> int:

@@ -35,6 +35,20 @@ from .state import ParticleState
 log = logging.getLogger(__name__)
 
 CHUNK_WALL_SECONDS = 0.25  # a compiled chunk should return to Python about this often (Ctrl-C, progress)
+COMPILE_NOTICE_SECONDS = 3.0  # a first chunk still running after this long is compiling: say so
+_kernels_ready = False  # a chunk has returned in this process: the kernels are compiled or loaded
+
+
+def _mark_kernels_ready() -> None:
+    global _kernels_ready
+    _kernels_ready = True
+
+
+def steps_to(until: float, dt: float) -> int:
+    """The step count that reaches simulated time ``until`` with steps ``dt``: the first step at or after it
+    (a run never stops short of the time asked; it overshoots by less than one step, and by nothing where
+    ``until`` is a multiple of ``dt`` to a millionth of a step)."""
+    return int(math.ceil(until / dt - 1e-6))
 
 
 def seconds_since_process_start() -> float | None:
@@ -83,12 +97,16 @@ class Progress:
             return
         self._last = now
         wall = now - sim._run_wall_start
-        done = sim.time - sim._run_time_start
+        # rate and ETA from the chunks after the first (whose wall time holds the kernels' compilation)
+        warm = now - sim._warm_wall_start if sim._warm_wall_start is not None else 0.0
+        done = sim.time - sim._warm_time_start if sim._warm_time_start is not None else 0.0
         left = until - sim.time
-        eta = wall / done * left if done > 0 else math.nan
-        rate = sim._run_particle_steps / wall if wall > 0 else 0.0
-        self.logger.info(f"t = {sim.time:.4f} / {until:.4f} s   wall {wall:7.1f} s   ETA {eta:7.1f} s   "
-                         f"{rate:.3g} particle-steps/s")
+        if done > 0 and warm > 0:
+            eta = f"ETA {max(warm / done * left, 0.0):7.1f} s"
+            rate = f"{sim._warm_particle_steps / warm:.3g} particle-steps/s"
+        else:
+            eta, rate = "ETA       ?  ", "(first chunk)"
+        self.logger.info(f"t = {sim.time:.4f} / {until:.4f} s   wall {wall:7.1f} s   {eta}   {rate}")
 
 
 class Simulation:
@@ -133,6 +151,12 @@ class Simulation:
         self.gas_seconds = 0.0
         self.output_seconds = 0.0
         self.particle_steps = 0
+        # wall time and particle steps of run() after its first chunk (the kernels' compilation left out), summed
+        # over runs and resumes: the summary's particle_steps_per_s
+        self.warm_seconds = 0.0
+        self.warm_particle_steps = 0
+        self._warm_wall_start = self._warm_time_start = None
+        self._warm_particle_steps = 0
         self._summary_extra: dict = {}
         self.startup_s: float | None = None  # process start → first compiled chunk done
         if self.out_dir is not None:
@@ -245,7 +269,7 @@ class Simulation:
         a resume there would take no step."""
         steps, dt = int(scalars.get("steps", 0)), float(scalars.get("dt", 0.0))
         target = self.case.time.end if until is None else until
-        if dt > 0 and int(round(target / dt)) <= steps:
+        if dt > 0 and steps_to(target, dt) <= steps:
             asked = f"--until {target:g}" if until is not None else f"its time.end = {target:g} s"
             raise CaseError(f"--resume {self.out_dir}: the run is already at t = {steps * dt:.6g} s >= {asked}; "
                             f"give a later --until to continue it")
@@ -333,16 +357,21 @@ class Simulation:
         until = self.case.time.end if until is None else until
         if not math.isfinite(until):
             raise CaseError(f"until = {until!r}: must be a finite number of simulated seconds")
-        target = int(round(until / self.dt))
+        target = steps_to(until, self.dt)
         self._run_wall_start = _time.perf_counter()
         self._run_time_start = self.time
         self._run_particle_steps = 0
-        wall0 = self.wall_time
+        self._warm_wall_start = self._warm_time_start = None  # set when the first chunk has returned
+        self._warm_particle_steps = 0
+        warm_steps0 = self.warm_particle_steps
+        wall0, warm0 = self.wall_time, self.warm_seconds
         nxt = {k: o.schedule.next_step(self.steps, self.dt) for k, o in self.observers.items()}
+        fired = dict.fromkeys(self.observers, -1)  # the step each observer last wrote at
         if self.steps == 0:
             t0 = _time.perf_counter()
-            for obs in self.observers.values():
+            for k, obs in self.observers.items():
                 obs(self)
+                fired[k] = 0
             self.output_seconds += _time.perf_counter() - t0
         chunk = 64
         self.checks.start()
@@ -357,12 +386,25 @@ class Simulation:
                 t0 = _time.perf_counter()
                 engine0 = self.gas.engine_seconds if self.gas is not None else 0.0
                 n = stop - self.steps
+                notice = None
+                if not _kernels_ready:  # a first chunk that takes long is compiling: say so, once
+                    import threading
+
+                    notice = threading.Timer(COMPILE_NOTICE_SECONDS, log.info, (
+                        "compiling the kernels (the first run after an install or an update; later runs load "
+                        "them from the cache in seconds)...",))
+                    notice.daemon = True
+                    notice.start()
                 try:
                     self.advance(n)  # GasConvergenceError, CollisionCascadeError: handled below as a failure
                 except ValueError as err:  # the gas exchange refused the particles (e.g. out of the grid)
                     if self.gas is None:
                         raise
                     raise self.checks.from_error(err) from None
+                finally:
+                    if notice is not None:
+                        notice.cancel()
+                _mark_kernels_ready()
                 if self.startup_s is None:
                     self.startup_s = seconds_since_process_start()
                 self._run_particle_steps += n * self.engine.state.n
@@ -382,8 +424,16 @@ class Simulation:
                 for k, obs in self.observers.items():
                     if self.steps >= nxt[k]:
                         obs(self)
+                        fired[k] = self.steps
                         nxt[k] = obs.schedule.next_step(self.steps, self.dt)
                 self.output_seconds += _time.perf_counter() - t0
+                now = _time.perf_counter()
+                if self._warm_wall_start is None:  # the first chunk is done: rates count from here
+                    self._warm_wall_start, self._warm_time_start = now, self.time
+                else:
+                    self._warm_particle_steps += n * self.engine.state.n
+                    self.warm_seconds = warm0 + now - self._warm_wall_start
+                    self.warm_particle_steps = warm_steps0 + self._warm_particle_steps
                 if self.progress is not None:
                     self.progress.maybe(self, until)
         except KeyboardInterrupt:
@@ -411,6 +461,13 @@ class Simulation:
             raise
         finally:
             self._restore_signal_handlers(handlers)
+        # the end time's probe row, snapshot and gas fields, where the schedule did not fall on it (the
+        # checkpoint is written by _finish)
+        t0 = _time.perf_counter()
+        for k, obs in self.observers.items():
+            if k != "checkpoint" and fired[k] != self.steps:
+                obs(self)
+        self.output_seconds += _time.perf_counter() - t0
         self.wall_time = wall0 + _time.perf_counter() - self._run_wall_start
         if self.progress is not None:
             self.progress.maybe(self, until, force=True)
@@ -487,7 +544,9 @@ class Simulation:
             "sim_time_s": self.time,
             "wall_time_s": self.wall_time,
             "n_particles": eng.state.n,
-            "particle_steps_per_s": self.particle_steps / self.wall_time if self.wall_time > 0 else None,
+            # after the first chunk of each run (the compilation): the engine's own speed
+            "particle_steps_per_s": (self.warm_particle_steps / self.warm_seconds if self.warm_seconds > 0 else
+                                     self.particle_steps / self.wall_time if self.wall_time > 0 else None),
             "steps": self.steps,
             "dt_s": self.dt,
             "contact_time_s": getattr(eng, "contact_time", None),
@@ -559,6 +618,7 @@ class Simulation:
         if own and self._checkpoint_step is not None and self._checkpoint_step < self.steps:
             previous = self.out_dir / PREVIOUS_RESTART_NAME
         scalars = dict(self.engine.checkpoint_scalars(), wall_time=self.wall_time, particle_steps=self.particle_steps,
+                       warm_seconds=self.warm_seconds, warm_particle_steps=self.warm_particle_steps,
                        particle_seconds=self.particle_seconds, gas_seconds=self.gas_seconds,
                        output_seconds=self.output_seconds)
         if self.energy0 is not None:
@@ -588,6 +648,8 @@ class Simulation:
         for k in ("particle_seconds", "gas_seconds", "output_seconds"):  # absent from checkpoints before 2026-11-26
             setattr(self, k, float(scalars.get(k, 0.0)))
         self.particle_steps = int(scalars.get("particle_steps", 0))
+        self.warm_seconds = float(scalars.get("warm_seconds", 0.0))  # absent from checkpoints before 2026-11-27
+        self.warm_particle_steps = int(scalars.get("warm_particle_steps", 0))
         if "energy0" in scalars:
             self.energy0 = float(scalars["energy0"])
 

@@ -560,3 +560,52 @@ def test_cases_shows_each_case_size_length_and_a_rough_wall_time(capsys):
     case = load_case("pour")
     assert _dt(case) == pytest.approx(engine_for(case).dt, rel=1e-12)
     assert 1.0 < wall_time_estimate(case) < 60.0  # 500 particles × 1e5 steps at millions of particle-steps/s
+
+
+# ---------------------------------------------------------------- the end of a run
+def test_a_run_ends_at_the_time_asked_with_its_last_probe_row_and_snapshot(tmp_path, capsys):
+    """--until between two steps: the run takes the step that reaches it (never stops short), and the probe
+    row and snapshot of that end time are written even where their schedules do not fall on it; the closing
+    lines say where the outputs are and how to plot them."""
+    from fluidem.io.probes_csv import read_probes
+    from fluidem.io.snapshots import snapshot_index
+
+    out = tmp_path / "run"
+    until = 0.0123  # pour: dt = 1.495e-5 s, so 822.8 steps; probes every 1.5 ms, snapshots every 15 ms
+    rc, stdout, err = cli(["run", "pour", "--until", until, "--out", out], capsys)
+    assert rc == 0
+    summary = json.loads(stdout)
+    dt = summary["dt_s"]
+    assert until <= summary["sim_time_s"] < until + dt
+    assert read_probes(out / "probes.csv")["time_s"][-1] == pytest.approx(summary["sim_time_s"], rel=1e-9)
+    assert snapshot_index(out / "particles.h5")[-1][1] == pytest.approx(summary["sim_time_s"], rel=1e-12)
+    assert f"outputs in {out}/" in err and f"fluidem plot {out}" in err and f"fluidem report {out}" in err
+
+
+def test_the_first_chunk_that_compiles_is_announced_and_left_out_of_the_rate(tmp_path, caplog, monkeypatch):
+    """A first chunk slower than COMPILE_NOTICE_SECONDS (here made 1.5 s slow) is announced, and the summary's
+    particle_steps_per_s counts only the chunks after it."""
+    import logging
+
+    from fluidem import simulation as S
+
+    case = load_case("pour", {"time.end": 0.02})
+    sim = S.Simulation(case, out_dir=tmp_path / "run")
+    advance, calls = sim.advance, []
+
+    def slow_first(n):
+        calls.append(n)
+        if len(calls) == 1:
+            time.sleep(1.5)
+        advance(n)
+
+    monkeypatch.setattr(sim, "advance", slow_first)
+    monkeypatch.setattr(S, "_kernels_ready", False)
+    monkeypatch.setattr(S, "COMPILE_NOTICE_SECONDS", 0.5)
+    with caplog.at_level(logging.INFO, logger="fluidem"):
+        summary = sim.run()
+    assert any("compiling the kernels" in r.getMessage() for r in caplog.records)
+    naive = sim.particle_steps / sim.wall_time
+    assert sim.warm_seconds < sim.wall_time - 1.5
+    assert summary["particle_steps_per_s"] == pytest.approx(sim.warm_particle_steps / sim.warm_seconds)
+    assert summary["particle_steps_per_s"] > naive

@@ -107,7 +107,7 @@ class GasSection(_Strict):
     properties: PropertiesSpec = Field(default_factory=PropertiesSpec)
     boundaries: dict[str, BoundaryChoice] = Field(description="a condition on each of left, right, bottom, top "
                                                               "(and front, back on a 3D grid)")
-    initial_velocity: tuple[float, float] | tuple[float, float, float] = Field(
+    initial_velocity: tuple[float, ...] = Field(
         (0.0, 0.0), description="interstitial gas velocity at t = 0 [m/s]: (u, v), or (u, v, w) on a 3D grid (a "
                                 "pair there means w = 0)")
     convection: Literal["upwind", "tvd"] = Field(
@@ -150,6 +150,13 @@ class GasSection(_Strict):
         for a, b in OPPOSITE_PAIRS[:len(sides) // 2]:
             if (a in periodic) != (b in periodic):
                 raise ValueError(f"sides {a} and {b}: periodic needs both opposite sides periodic")
+        return v
+
+    @field_validator("initial_velocity")
+    @classmethod
+    def _two_or_three(cls, v):
+        if len(v) not in (2, 3):
+            raise ValueError(f"a velocity has 2 components (u, v) or, on a 3D grid, 3 (u, v, w); got {len(v)}")
         return v
 
     @model_validator(mode="after")

@@ -127,11 +127,15 @@ class GasSection(_Strict):
 
     @field_validator("boundaries", mode="before")
     @classmethod
-    def _known_sides(cls, v):
-        """Side names first: an unknown side is reported as such, whatever its value."""
-        unknown = sorted(set(v) - set(SIDES), key=str) if isinstance(v, dict) else []
+    def _known_sides(cls, v, info: ValidationInfo):
+        """Side names first: an unknown side is reported as such, whatever its value (front and back are
+        sides of a 3D grid only)."""
+        grid = info.data.get("grid")
+        sides = SIDES_3D if grid is not None and grid.dimensions == 3 else SIDES
+        unknown = sorted(set(v) - set(sides), key=str) if isinstance(v, dict) else []
         if unknown:
-            raise ValueError(f"unknown side(s) {', '.join(map(repr, unknown))}; allowed: {', '.join(SIDES)}")
+            more = " (front and back are the z sides of a 3D grid)" if set(unknown) & {"front", "back"} else ""
+            raise ValueError(f"unknown side(s) {', '.join(map(repr, unknown))}; allowed: {', '.join(sides)}{more}")
         return v
 
     @field_validator("boundaries")

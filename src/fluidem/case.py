@@ -276,7 +276,7 @@ class Case(Strict):
             if wp.wall is not None and wp.wall not in names:
                 raise ValueError(f"particles.wall_pairs: wall {wp.wall!r} is not one of {names}")
         if self.gas is None and self.coupling is not None:
-            raise ValueError("coupling: the [coupling] section needs a [gas] section; add one, or remove [coupling] "
+            raise ValueError("coupling: [coupling] needs a [gas] section; add one, or remove [coupling] "
                              "for a run without gas")
         if self.gas is not None:
             if self.gas.grid.dimensions == 3:

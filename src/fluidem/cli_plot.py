@@ -146,7 +146,7 @@ def add_commands(subparsers) -> None:
     p.add_argument("--format", default="png", metavar="FMT[,FMT]", help="png, svg and/or pdf (default png)")
     p.add_argument("--only", metavar="NAME[,NAME]",
                    help="only these figures: snapshots, energy, contacts, multicontact, bed_height, pressure, "
-                        "voidage, solids_fraction, forces")
+                        "voidage, solids_fraction, forces, segregation")
     p.add_argument("--window", metavar="T0,T1",
                    help="time window [s] of the time averages: gas and force maps, multicontact means "
                         "(default 5,10 when the run covers it, else the second half of the run)")

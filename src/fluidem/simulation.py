@@ -165,11 +165,13 @@ class Simulation:
         if scalars is not None:
             self._restore_run(scalars)
             # the outputs up to the checkpoint's step stay: its observers fired before the checkpoint was
-            # written. At step 0, ``run`` fires every observer again, so nothing stays (t = 0 once).
-            keep = self.steps if self.steps > 0 else -1
+            # written. At step 0, ``run`` fires every observer again, so nothing stays (t = 0 once). A row at
+            # the checkpoint's step that its schedule does not fall on is the end-of-run output of a run
+            # stopped there (``run``): it goes, so that a resumed run's outputs are an uninterrupted run's.
             for obs in self.observers.values():
                 if hasattr(obs, "truncate_after"):
-                    obs.truncate_after(keep)
+                    on_schedule = self.steps > 0 and obs.schedule.next_step(self.steps - 1, self.dt) == self.steps
+                    obs.truncate_after(self.steps if on_schedule else self.steps - 1)
 
     def _gas_coupling(self, engine):
         """The two-way coupling of a case with a gas (gas steps of DT, DEM sub-steps within); None without."""

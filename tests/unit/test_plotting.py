@@ -396,7 +396,7 @@ def test_animation_has_one_frame_per_snapshot_of_the_promised_size(pour_run, tmp
     frames, width, height = map(int, m.groups())
     with h5py.File(pour_run / "particles.h5") as f:
         n_snapshots = len(f["snapshots"])
-    assert frames == n_snapshots == 3
+    assert frames == n_snapshots == 4  # 0, 0.02 and 0.04 s on the schedule, and the end time 0.05 s
     assert height == 320 and width % 16 == 0
     assert 0.4 * height < width < 1.2 * height  # a 24 × 48 diameter container, plus labels and colour bar
     reader = iio.get_reader(out)

@@ -65,6 +65,9 @@ class FigureSpec:
     lacks: Callable[[RunData], str | None]
     draw: Callable[[RunData, PlotOptions], object]
     stem: Callable[[PlotOptions], str] | None = None
+    # whether the figure belongs to this kind of run at all (None: every run); one that does not is left out
+    # without a note, unless asked for by name (``--only``)
+    applies: Callable[[RunData], bool] | None = None
 
     def file_stem(self, options: PlotOptions) -> str:
         return self.stem(options) if self.stem else self.name
@@ -73,11 +76,11 @@ class FigureSpec:
 figures: Registry[FigureSpec] = Registry("figure")
 
 
-def figure(name: str, description: str, lacks: Callable[[RunData], str | None], stem=None):
+def figure(name: str, description: str, lacks: Callable[[RunData], str | None], stem=None, applies=None):
     """Register the decorated ``draw(run, options) -> Figure`` as figure ``name``."""
 
     def deco(draw):
-        figures.register(name)(FigureSpec(name, description, lacks, draw, stem))
+        figures.register(name)(FigureSpec(name, description, lacks, draw, stem, applies))
         return draw
 
     return deco
@@ -101,6 +104,8 @@ def render(run: RunData, options: PlotOptions, only: list[str] | None = None):
     """Yield (spec, figure or None, reason or None) for every registered figure, in order."""
     for name, spec in figures.items():
         if only is not None and name not in only:
+            continue
+        if only is None and spec.applies is not None and not spec.applies(run):
             continue
         why = spec.lacks(run)
         if why is None:

@@ -17,8 +17,15 @@ def _lacks_mixing(run: RunData) -> str | None:
     return None
 
 
+def _several_species(run: RunData) -> bool:
+    try:
+        return len(run.species_names) > 1
+    except Exception:  # noqa: BLE001 - no readable case: let ``lacks`` say what is missing
+        return True
+
+
 @figure("segregation", "mean height of each species and the segregation and Lacey mixing indices against time",
-        lacks=_lacks_mixing)
+        lacks=_lacks_mixing, applies=_several_species)
 def draw_segregation(run: RunData, options: PlotOptions):
     p = run.probes
     t = p["time_s"]

@@ -99,10 +99,12 @@ def heap_angle(pos, radius):
     return math.degrees(math.atan(slope))
 
 
-@pytest.mark.validation
 def test_angle_of_repose_grows_with_rolling_friction():
     """300 discs poured from a column onto a floor (2D): a larger μ_r builds a steeper heap.
-    Measured (4 mm discs, μ = 0.5, linear law, 1.2 s): see the printout; recorded in docs/physics/contact.md."""
+
+    Measured (4 mm discs, μ = 0.5, linear law, 1.2 s; about 15 s of run time): 0.6° without rolling
+    friction (a tenth of the discs roll away and the rest spreads into three layers), 8.5° with μ_r = 0.3
+    (a heap seven diameters high). Margin 5°: the flank fit of a heap this small scatters by a degree or two."""
     from fluidem.case import validate_case
     from fluidem.particles.softsphere import SoftSphereEngine
 
@@ -121,7 +123,8 @@ def test_angle_of_repose_grows_with_rolling_friction():
         eng = SoftSphereEngine(case)
         eng.advance(int(1.2 / eng.dt))
         st = eng.state
-        assert np.abs(st.velocity).max() < 0.05, "the heap has settled"
+        # the heap has settled (without rolling friction a tenth of the discs leave it and keep rolling on the floor)
+        assert np.median(np.linalg.norm(st.velocity, axis=1)) < 1e-3, "the heap has settled"
         angles[mu_r] = heap_angle(st.position, st.radius)
     print(f"angle of repose: mu_r = 0: {angles[0.0]:.1f} deg, mu_r = 0.3: {angles[0.3]:.1f} deg")
     assert angles[0.3] > angles[0.0] + 5.0

@@ -73,6 +73,10 @@ class ContactOverride(Strict):
     friction: float | None = Field(None, ge=0.0, description="Coulomb friction coefficient mu [-]")
     stiffness: float | None = Field(None, gt=0.0, description="normal stiffness k_n [N/m] (linear_spring_dashpot)")
     damping: float | None = Field(None, ge=0.0, description="normal damping eta_n [N s/m] (linear_spring_dashpot)")
+    surface_energy: float | None = Field(None, ge=0.0, description="JKR surface energy gamma [J/m^2] "
+                                                                  "(hertz_mindlin_jkr)")
+    rolling_friction: float | None = Field(None, ge=0.0, description="rolling friction coefficient mu_r [-] "
+                                                                    "(soft-sphere laws)")
 
     def changes(self) -> dict:
         """The parameters this override sets."""

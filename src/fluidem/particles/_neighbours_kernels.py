@@ -416,7 +416,7 @@ def renumber_pairs(row_start, partner, hist, new_index):
     order = np.argsort(keys)  # keys are distinct: the order is unique
     new_start = np.zeros(n + 1, dtype=np.int64)
     new_partner = np.empty(npair, dtype=np.int32)
-    new_hist = np.empty((npair, 3))
+    new_hist = np.empty((npair, hist.shape[1]))
     for q in range(npair):
         p = order[U(q)]
         k = keys[U(p)]
@@ -425,6 +425,8 @@ def renumber_pairs(row_start, partner, hist, new_index):
         new_hist[U(q), U(0)] = hist[U(p), U(0)]
         new_hist[U(q), U(1)] = hist[U(p), U(1)]
         new_hist[U(q), U(2)] = hist[U(p), U(2)]
+        for e in range(3, hist.shape[1]):  # columns of an adhesive law (scalars of the pair)
+            new_hist[U(q), U(e)] = hist[U(p), U(e)]
     for i in range(n):
         new_start[U(i + 1)] += new_start[U(i)]
     return new_start, new_partner, new_hist
@@ -467,7 +469,8 @@ def contacts_first(pos, radius, row_start, partner, hist):
 def _contacts_first_rows(lo, hi, m, pos, radius, row_start, partner, hist):
     """``contacts_first`` for rows lo..hi−1; m: the longest row."""
     tmp_p = np.empty(m, dtype=partner.dtype)
-    tmp_h = np.empty((m, 3))
+    width = hist.shape[1]
+    tmp_h = np.empty((m, width))
     for i_ in range(lo, hi):
         i = U(i_)
         r0 = row_start[i]
@@ -493,12 +496,16 @@ def _contacts_first_rows(lo, hi, m, pos, radius, row_start, partner, hist):
             tmp_h[q, U(0)] = hist[p, U(0)]
             tmp_h[q, U(1)] = hist[p, U(1)]
             tmp_h[q, U(2)] = hist[p, U(2)]
+            for e in range(3, width):
+                tmp_h[q, U(e)] = hist[p, U(e)]
         for k in range(a):  # touching pairs, in their former order
             p = U(r0 + k)
             partner[p] = tmp_p[U(k)]
             hist[p, U(0)] = tmp_h[U(k), U(0)]
             hist[p, U(1)] = tmp_h[U(k), U(1)]
             hist[p, U(2)] = tmp_h[U(k), U(2)]
+            for e in range(3, width):
+                hist[p, U(e)] = tmp_h[U(k), U(e)]
         for k in range(b):  # then the others, in their former order (stored backwards from the end)
             p = U(r0 + a + k)
             q = U(m - 1 - k)
@@ -506,6 +513,8 @@ def _contacts_first_rows(lo, hi, m, pos, radius, row_start, partner, hist):
             hist[p, U(0)] = tmp_h[q, U(0)]
             hist[p, U(1)] = tmp_h[q, U(1)]
             hist[p, U(2)] = tmp_h[q, U(2)]
+            for e in range(3, width):
+                hist[p, U(e)] = tmp_h[q, U(e)]
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
@@ -514,9 +523,10 @@ def carry_history(old_start, old_partner, old_hist, new_start, new_partner):
 
     A pair whose owner changed (a particle crossed a slab boundary) is found in the
     old row of its partner; its history, kept relative to the owner, changes sign.
+    Columns after the third (an adhesive law's pull-off distance) are scalars of the pair: copied as they are.
     """
     n = new_start.shape[0] - 1
-    hist = np.zeros((new_partner.shape[0], 3))
+    hist = np.zeros((new_partner.shape[0], old_hist.shape[1]))
     for i in prange(n):
         for p in range(new_start[i], new_start[i + 1]):
             j = new_partner[p]
@@ -529,4 +539,6 @@ def carry_history(old_start, old_partner, old_hist, new_start, new_partner):
                 hist[p, 0] = sign * old_hist[q, 0]
                 hist[p, 1] = sign * old_hist[q, 1]
                 hist[p, 2] = sign * old_hist[q, 2]
+                for e in range(3, old_hist.shape[1]):
+                    hist[p, e] = old_hist[q, e]
     return hist

@@ -33,6 +33,12 @@ root). Flat 2D beds (``flat``, see ``_softsphere_kernels.is_flat``) leave the z 
 the filter, gather and scatter; the law computes them, as zeros (one law to compile, not two).
 Measured in ``benchmarks/README.md``.
 
+A table with rolling friction or an adhesive law (slots 8 and 10 of ``contact/base.py``; ``ext`` of
+``make_work``) runs ``_law_ext`` instead: ``contact_force_full`` in scalar code, with the relative spin
+gathered and the rolling torques and pull-off distances scattered. An adhesive law's contacts last
+beyond touch: the fourth history column holds each formed contact's pull-off distance, which widens
+``_filter``'s contact test for that pair until the pair parts beyond it (then the column is reset).
+
 Each particle's force sum receives its terms in the order of the slab's contact list
 (slabs of one parity in parallel, then the other), whatever the number of threads: the
 sums are bitwise independent of the thread count. They equal a contact-by-contact evaluation
@@ -43,19 +49,24 @@ import math
 import numpy as np
 from numba import njit
 
-from .contact._dispatch import contact_force
-from .contact.base import N_SLOTS
+from .contact._dispatch import contact_force, contact_force_full
+from .contact.base import N_SLOTS, SLOT_EXTENDED, SLOT_ROLLING_FRICTION
 
 U = np.uintp  # unsigned array index (see _softsphere_kernels)
 
-CHUNK = 128  # contacts per chunk: G and out take 34 KB, about the L1 cache (chunks of 32 and 64 ran as fast)
+CHUNK = 128  # contacts per chunk: the rows of G and out that _law reads and writes take 38 KB, about the L1 cache
+# (chunks of 32 and 64 ran as fast)
 # rows of G: what the law reads of a contact
 G_RX, G_RY, G_RZ, G_AI, G_AJ, G_MI, G_MJ, G_VX, G_VY, G_VZ, G_OX, G_OY, G_OZ, G_HX, G_HY, G_HZ = range(16)
-G_LAW = 16  # rows G_LAW … G_LAW + 7: the 8 slots of the packed contact row (contact/base.py; slot 0 the model code)
-N_G = G_LAW + N_SLOTS
+G_LAW = 16  # rows G_LAW … G_LAW + N_SLOTS − 1: the slots of the packed contact row (contact/base.py; slot 0 the code)
+# extended law only (rolling resistance, adhesion): the relative spin ω_i − ω_j
+G_SX, G_SY, G_SZ = G_LAW + N_SLOTS, G_LAW + N_SLOTS + 1, G_LAW + N_SLOTS + 2
+N_G = G_LAW + N_SLOTS + 3
 # rows of out: what the law gives
 O_FX, O_FY, O_FZ, O_CX, O_CY, O_CZ, O_HX, O_HY, O_HZ = range(9)
-N_O = 9
+# extended law only: the pull-off distance (history column 3) and the rolling torque per unit radius on i and on j
+O_REACH, O_MIX, O_MIY, O_MIZ, O_MJX, O_MJY, O_MJZ = range(9, 16)
+N_O = 16
 
 
 @njit(cache=True, error_model="numpy")
@@ -72,13 +83,15 @@ def _uniform(pp):
 @njit(cache=True, error_model="numpy")
 def make_work(pp, row_start, hist, slab_start, slab_members, nthreads):
     """Work arrays of the chunked pair forces for the current Verlet list, made at each ``advance`` call and
-    list rebuild: (cbuf, ibuf, G, out, touch, uniform).
+    list rebuild: (cbuf, ibuf, G, out, touch, uniform, ext).
 
     cbuf, ibuf (nthreads, M) uint32: a thread's contact list of one slab (pair slot, owner), M the most
     listed pairs of any slab; G (nthreads, N_G · CHUNK), out (nthreads, N_O · CHUNK): a thread's chunk;
     touch (P,) uint8: 1 where the pair's spring is set (it touched at the last evaluation: a spring is
-    zero otherwise); uniform: one contact row for all species pairs, copied into every G here. The z rows
-    of G start at zero and stay so in a flat bed.
+    zero otherwise; with an adhesive law, also where its history column 3 marks a formed contact); uniform:
+    one contact row for all species pairs, copied into every G here; ext: some row has rolling friction or an
+    adhesive law (slots 8, 10), which selects the extended law (``_law_ext``). The z rows of G start at zero
+    and stay so in a flat bed.
     """
     nslab = slab_start.shape[0] - 1
     most = 0
@@ -96,19 +109,29 @@ def make_work(pp, row_start, hist, slab_start, slab_members, nthreads):
     touch = np.empty(npair, dtype=np.uint8)
     for p in range(npair):
         touch[p] = (hist[p, 0] != 0.0) | (hist[p, 1] != 0.0) | (hist[p, 2] != 0.0)
+    if hist.shape[1] > 3:
+        for p in range(npair):
+            touch[p] |= hist[p, 3] != 0.0
     uniform = _uniform(pp)
+    ext = False
+    for a in range(pp.shape[0]):
+        for b in range(pp.shape[1]):
+            ext |= (pp[a, b, SLOT_ROLLING_FRICTION] != 0.0) | (pp[a, b, SLOT_EXTENDED] != 0.0)
     if uniform:
         for t in range(nthreads):
             for q in range(N_SLOTS):
                 v = pp[0, 0, q]
                 for c in range(CHUNK):
                     G[t, (G_LAW + q) * CHUNK + c] = v
-    return cbuf, ibuf, G, out, touch, uniform
+    return cbuf, ibuf, G, out, touch, uniform, ext
 
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _filter(flat, s, pos, radius, row_start, partner, slab_start, slab_members, hist, touch, cbuf, ibuf):
-    """The touching pairs of slab s into cbuf/ibuf (returns their number); springs of ended contacts reset."""
+    """The touching pairs of slab s into cbuf/ibuf (returns their number); springs of ended contacts reset.
+    With a fourth history column (an adhesive law) a pair is in contact while r < a_i + a_j + hist[3]: its
+    pull-off distance once formed, 0 before."""
+    wide = hist.shape[1] > 3
     us = U(s)
     k = U(0)
     for m in range(slab_start[us], slab_start[us + U(1)]):
@@ -124,11 +147,15 @@ def _filter(flat, s, pos, radius, row_start, partner, slab_start, slab_members, 
             ry = yi - pos[j, U(1)]
             rz = 0.0 if flat else zi - pos[j, U(2)]
             cut = ai + radius[j]
+            if wide:
+                cut += hist[p, U(3)]
             t = rx * rx + ry * ry + rz * rz < cut * cut
             if touch[p] > t:  # touched at the last evaluation, not now: the contact ended
                 hist[p, U(0)] = 0.0
                 hist[p, U(1)] = 0.0
                 hist[p, U(2)] = 0.0
+                if wide:
+                    hist[p, U(3)] = 0.0
             touch[p] = t
             cbuf[k] = p
             ibuf[k] = i
@@ -137,8 +164,9 @@ def _filter(flat, s, pos, radius, row_start, partner, slab_start, slab_members, 
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _gather(flat, uniform, c0, n, pos, vel, omega, radius, mass, species, pp, partner, hist, cbuf, ibuf, G):
-    """What the law reads of contacts c0 … c0 + n − 1 of the list into the rows of G."""
+def _gather(flat, uniform, ext, c0, n, pos, vel, omega, radius, mass, species, pp, partner, hist, cbuf, ibuf, G):
+    """What the law reads of contacts c0 … c0 + n − 1 of the list into the rows of G (ext: also the relative
+    spin)."""
     for c_ in range(n):
         c = U(c_)
         p = U(cbuf[U(c0) + c])
@@ -168,6 +196,11 @@ def _gather(flat, uniform, c0, n, pos, vel, omega, radius, mass, species, pp, pa
             sj = U(species[j])
             for q in range(N_SLOTS):
                 G[U((G_LAW + q) * CHUNK) + c] = pp[si, sj, U(q)]
+        if ext:
+            G[U(G_SZ * CHUNK) + c] = omega[i, U(2)] - omega[j, U(2)]
+            if not flat:
+                G[U(G_SX * CHUNK) + c] = omega[i, U(0)] - omega[j, U(0)]
+                G[U(G_SY * CHUNK) + c] = omega[i, U(1)] - omega[j, U(1)]
 
 
 @njit(cache=True, error_model="numpy", fastmath=True)
@@ -214,10 +247,63 @@ def _law(n, G, out, dt, update):
         out[U(O_HZ * CHUNK) + c] = hz
 
 
+@njit(cache=True, error_model="numpy")
+def _law_ext(n, G, out, dt, update):
+    """``_law`` for tables with rolling friction or an adhesive law: ``contact_force_full`` (every law; overlaps
+    down to the pull-off distance; rolling torque), and the pull-off distance and rolling torques into out.
+    Scalar code (the JKR contact radius takes a cube root, which does not vectorise)."""
+    for c_ in range(n):
+        c = U(c_)
+        rx = G[U(G_RX * CHUNK) + c]
+        ry = G[U(G_RY * CHUNK) + c]
+        rz = G[U(G_RZ * CHUNK) + c]
+        ai = G[U(G_AI * CHUNK) + c]
+        aj = G[U(G_AJ * CHUNK) + c]
+        mi = G[U(G_MI * CHUNK) + c]
+        mj = G[U(G_MJ * CHUNK) + c]
+        r = math.sqrt(rx * rx + ry * ry + rz * rz)
+        inv_r = 1.0 / r
+        nx = rx * inv_r
+        ny = ry * inv_r
+        nz = rz * inv_r
+        cut = ai + aj
+        m_eff = mi * mj / (mi + mj)
+        r_eff = ai * aj / (ai + aj)
+        lever = r / cut  # as in _law
+        law = (G[U((G_LAW + 0) * CHUNK) + c], G[U((G_LAW + 1) * CHUNK) + c], G[U((G_LAW + 2) * CHUNK) + c],
+               G[U((G_LAW + 3) * CHUNK) + c], G[U((G_LAW + 4) * CHUNK) + c], G[U((G_LAW + 5) * CHUNK) + c],
+               G[U((G_LAW + 6) * CHUNK) + c], G[U((G_LAW + 7) * CHUNK) + c], G[U((G_LAW + 8) * CHUNK) + c],
+               G[U((G_LAW + 9) * CHUNK) + c], G[U((G_LAW + 10) * CHUNK) + c], G[U((G_LAW + 11) * CHUNK) + c])
+        fn, ftx, fty, ftz, hx, hy, hz, reach, mx, my, mz = contact_force_full(
+            law, cut - r, nx, ny, nz, G[U(G_VX * CHUNK) + c], G[U(G_VY * CHUNK) + c], G[U(G_VZ * CHUNK) + c],
+            G[U(G_OX * CHUNK) + c] * lever, G[U(G_OY * CHUNK) + c] * lever, G[U(G_OZ * CHUNK) + c] * lever,
+            G[U(G_SX * CHUNK) + c], G[U(G_SY * CHUNK) + c], G[U(G_SZ * CHUNK) + c],
+            m_eff, r_eff, dt, G[U(G_HX * CHUNK) + c], G[U(G_HY * CHUNK) + c], G[U(G_HZ * CHUNK) + c], update)
+        out[U(O_FX * CHUNK) + c] = fn * nx + ftx
+        out[U(O_FY * CHUNK) + c] = fn * ny + fty
+        out[U(O_FZ * CHUNK) + c] = fn * nz + ftz
+        out[U(O_CX * CHUNK) + c] = -(ny * ftz - nz * fty) * lever
+        out[U(O_CY * CHUNK) + c] = -(nz * ftx - nx * ftz) * lever
+        out[U(O_CZ * CHUNK) + c] = -(nx * fty - ny * ftx) * lever
+        out[U(O_HX * CHUNK) + c] = hx
+        out[U(O_HY * CHUNK) + c] = hy
+        out[U(O_HZ * CHUNK) + c] = hz
+        out[U(O_REACH * CHUNK) + c] = reach
+        # the torque m on i and −m on j, per unit radius (the force pass multiplies the sums by the radius)
+        out[U(O_MIX * CHUNK) + c] = mx / ai
+        out[U(O_MIY * CHUNK) + c] = my / ai
+        out[U(O_MIZ * CHUNK) + c] = mz / ai
+        out[U(O_MJX * CHUNK) + c] = -mx / aj
+        out[U(O_MJY * CHUNK) + c] = -my / aj
+        out[U(O_MJZ * CHUNK) + c] = -mz / aj
+
+
 @njit(cache=True, error_model="numpy", inline="always")
-def _scatter(flat, c0, n, partner, hist, sum_f, sum_c, cbuf, ibuf, out):
+def _scatter(flat, ext, c0, n, partner, hist, sum_f, sum_c, cbuf, ibuf, out):
     """Forces and torques of contacts c0 … c0 + n − 1 into both particles' sums (+F on i, −F on j, the same
-    −n × F_t per unit lever on both); springs stored."""
+    −n × F_t per unit lever on both); springs stored. ext: also the rolling torques, and the pull-off distance
+    into history column 3 where there is one."""
+    wide = hist.shape[1] > 3
     for c_ in range(n):
         c = U(c_)
         p = U(cbuf[U(c0) + c])
@@ -245,10 +331,20 @@ def _scatter(flat, c0, n, partner, hist, sum_f, sum_c, cbuf, ibuf, out):
             sum_c[j, U(0)] += cx
             sum_c[j, U(1)] += cy
             hist[p, U(2)] = out[U(O_HZ * CHUNK) + c]
+        if ext:
+            sum_c[i, U(2)] += out[U(O_MIZ * CHUNK) + c]
+            sum_c[j, U(2)] += out[U(O_MJZ * CHUNK) + c]
+            if not flat:
+                sum_c[i, U(0)] += out[U(O_MIX * CHUNK) + c]
+                sum_c[i, U(1)] += out[U(O_MIY * CHUNK) + c]
+                sum_c[j, U(0)] += out[U(O_MJX * CHUNK) + c]
+                sum_c[j, U(1)] += out[U(O_MJY * CHUNK) + c]
+            if wide:
+                hist[p, U(3)] = out[U(O_REACH * CHUNK) + c]
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _slab_body(flat, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform):
+def _slab_body(flat, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform, ext):
     """The contacts of slab s: filter, then gather, law and scatter chunk by chunk.
     state: (pos, vel, omega, radius, mass, species); lists: (row_start, partner, slab_start, slab_members)."""
     pos, vel, omega, radius, mass, species = state
@@ -256,33 +352,36 @@ def _slab_body(flat, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch,
     k = _filter(flat, s, pos, radius, row_start, partner, slab_start, slab_members, hist, touch, cbuf, ibuf)
     for c0 in range(0, k, CHUNK):
         n = min(CHUNK, k - c0)
-        _gather(flat, uniform, c0, n, pos, vel, omega, radius, mass, species, pp, partner, hist, cbuf, ibuf, G)
-        _law(n, G, out, dt, update)
-        _scatter(flat, c0, n, partner, hist, sum_f, sum_c, cbuf, ibuf, out)
+        _gather(flat, uniform, ext, c0, n, pos, vel, omega, radius, mass, species, pp, partner, hist, cbuf, ibuf, G)
+        if ext:
+            _law_ext(n, G, out, dt, update)
+        else:
+            _law(n, G, out, dt, update)
+        _scatter(flat, ext, c0, n, partner, hist, sum_f, sum_c, cbuf, ibuf, out)
 
 
 @njit(cache=True, error_model="numpy")
-def _slab(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform):
+def _slab(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform, ext):
     """``_slab_body`` in 3D."""
-    _slab_body(False, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform)
+    _slab_body(False, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform, ext)
 
 
 @njit(cache=True, error_model="numpy")
-def _slab_flat(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform):
+def _slab_flat(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform, ext):
     """``_slab_body`` of a flat 2D bed."""
-    _slab_body(True, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform)
+    _slab_body(True, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform, ext)
 
 
 @njit(cache=True, error_model="numpy")
 def chunk_run(start, stop, flat, state, pp, lists, hist, dt, update, sum_f, sum_c, work, t):
     """The contacts of slabs start, start + 2, … below stop (one parity) with thread t's work rows."""
-    cbuf, ibuf, G, out, touch, uniform = work
+    cbuf, ibuf, G, out, touch, uniform, ext = work
     cb = cbuf[t]
     ib = ibuf[t]
     g = G[t]
     o = out[t]
     for s in range(start, stop, 2):
         if flat:
-            _slab_flat(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform)
+            _slab_flat(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform, ext)
         else:
-            _slab(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform)
+            _slab(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform, ext)

@@ -20,11 +20,11 @@ from numba import njit, prange
 
 from ._pair_kernels import chunk_run, make_work
 from ._neighbours_kernels import build_pairs, carry_history, cell_order, contacts_first, renumber_pairs
-from .contact._dispatch import contact_force
-from .contact.base import N_SLOTS
+from .contact._dispatch import contact_force, contact_force_full
+from .contact.base import N_SLOTS, SLOT_EXTENDED, SLOT_ROLLING_FRICTION
 
 U = np.uintp  # unsigned array index: no wrap-around code (module docstring)
-assert N_SLOTS == 8, "_law reads the 8 slots of a packed contact row"
+assert N_SLOTS == 12, "_law reads the first 8 slots of a packed contact row, _law_full all 12"
 
 # wall motion kinds (walls.py builds the table)
 STATIC, CONSTANT_VELOCITY, OSCILLATING = 0, 1, 2
@@ -55,6 +55,25 @@ def _law(table, a, b):
     increment and decrement (two out-of-line calls) per contact; a tuple of scalars costs nothing."""
     return (table[a, b, U(0)], table[a, b, U(1)], table[a, b, U(2)], table[a, b, U(3)], table[a, b, U(4)], table[a, b, U(5)],
             table[a, b, U(6)], table[a, b, U(7)])
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _law_full(table, a, b):
+    """Row (a, b) with all its slots (rolling friction, adhesion), for ``contact_force_full``."""
+    return (table[a, b, U(0)], table[a, b, U(1)], table[a, b, U(2)], table[a, b, U(3)], table[a, b, U(4)], table[a, b, U(5)],
+            table[a, b, U(6)], table[a, b, U(7)], table[a, b, U(8)], table[a, b, U(9)], table[a, b, U(10)],
+            table[a, b, U(11)])
+
+
+@njit(cache=True, error_model="numpy")
+def extended(table):
+    """True if a row of a packed contact table has rolling friction or an adhesive law: its contacts then go
+    through ``contact_force_full``."""
+    ext = False
+    for a in range(table.shape[0]):
+        for b in range(table.shape[1]):
+            ext |= (table[a, b, SLOT_ROLLING_FRICTION] != 0.0) | (table[a, b, SLOT_EXTENDED] != 0.0)
+    return ext
 
 
 @njit(cache=True, error_model="numpy")
@@ -206,43 +225,34 @@ def wall_axes(wall_normal):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _wall_force(law, overlap, nx, ny, nz, vx, vy, vz, wx, wy, wz, m, a, dt, h0, h1, h2, update):
-    """(F (3), T (3), new history (3)) of a sphere (mass m, radius a) on a wall plane (unit normal n into
-    the particle side, overlap > 0); v: v_i − v_wall, w: a ω_i. Scalars only (see _law)."""
-    fn, ftx, fty, ftz, hx, hy, hz = contact_force(law, overlap, nx, ny, nz, vx, vy, vz, wx, wy, wz, m, a, dt,
-                                                  h0, h1, h2, update)
-    tqx = -a * (ny * ftz - nz * fty)
-    tqy = -a * (nz * ftx - nx * ftz)
-    tqz = -a * (nx * fty - ny * ftx)
-    return fn * nx + ftx, fn * ny + fty, fn * nz + ftz, tqx, tqy, tqz, hx, hy, hz
-
-
-@njit(cache=True, error_model="numpy", inline="always")
 def wall_contact(i, w, pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_hist, dt, update):
     """(overlap, fx, fy, fz, tx, ty, tz) of particle i on wall w (a plane; infinite mass).
 
-    For analysis (``analysis.probes``); the stepping loop has the same code inline in _gather_range."""
+    For analysis (``analysis.probes``); the stepping loop has the same code inline in _gather_range (there
+    the plain ``contact_force`` serves tables without rolling friction or adhesion, with the same numbers)."""
     px, py, pz = wall_now[w, 0], wall_now[w, 1], wall_now[w, 2]
     wvx, wvy, wvz = wall_now[w, 3], wall_now[w, 4], wall_now[w, 5]
     nx, ny, nz = wall_normal[w, 0], wall_normal[w, 1], wall_normal[w, 2]
+    wide = wall_hist.shape[2] > 3
     gap = (pos[i, 0] - px) * nx + (pos[i, 1] - py) * ny + (pos[i, 2] - pz) * nz
     overlap = radius[i] - gap
-    if overlap <= 0.0:
+    if overlap <= -(wall_hist[i, w, 3] if wide else 0.0):
         if update:
-            wall_hist[i, w, 0] = 0.0
-            wall_hist[i, w, 1] = 0.0
-            wall_hist[i, w, 2] = 0.0
+            wall_hist[i, w, :] = 0.0
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     a = radius[i]
-    fx, fy, fz, tqx, tqy, tqz, hx, hy, hz = _wall_force(
-        _law(pw, species[i], w), overlap, nx, ny, nz, vel[i, 0] - wvx, vel[i, 1] - wvy, vel[i, 2] - wvz,
-        a * omega[i, 0], a * omega[i, 1], a * omega[i, 2], mass[i], a, dt,
+    fn, ftx, fty, ftz, hx, hy, hz, reach, mx, my, mz = contact_force_full(
+        _law_full(pw, species[i], w), overlap, nx, ny, nz, vel[i, 0] - wvx, vel[i, 1] - wvy, vel[i, 2] - wvz,
+        a * omega[i, 0], a * omega[i, 1], a * omega[i, 2], omega[i, 0], omega[i, 1], omega[i, 2], mass[i], a, dt,
         wall_hist[i, w, 0], wall_hist[i, w, 1], wall_hist[i, w, 2], update)
     if update:
         wall_hist[i, w, 0] = hx
         wall_hist[i, w, 1] = hy
         wall_hist[i, w, 2] = hz
-    return overlap, fx, fy, fz, tqx, tqy, tqz
+        if wide:
+            wall_hist[i, w, 3] = reach
+    return (overlap, fn * nx + ftx, fn * ny + fty, fn * nz + ftz, -a * (ny * ftz - nz * fty) + mx,
+            -a * (nz * ftx - nx * ftz) + my, -a * (nx * fty - ny * ftx) + mz)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -256,6 +266,10 @@ def _gather_body(flat, lo, hi, pos, vel, omega, radius, mass, species, pw, walls
     ``walls``: (wall_now, wall_normal, wall_axis, wall_hist, wall_touch, near_count, near_wall) in one tuple, as a
     call of more than 30 arguments is compiled by Python as f(*args), which Numba cannot inline."""
     wall_now, wall_normal, wall_axis, wall_hist, wall_touch, near_count, near_wall = walls
+    # rolling friction or an adhesive law at some wall: contact_force_full; an adhesive one keeps each contact's
+    # pull-off distance in wall_hist[i, w, 3] while it lasts (0 before it forms), as for pairs
+    wext = extended(pw)
+    wwide = wall_hist.shape[2] > 3
     half = 0.5 * dt
     moved = 0
     update = mode > 0
@@ -286,14 +300,40 @@ def _gather_body(flat, lo, hi, pos, vel, omega, radius, mass, species, pw, walls
             else:
                 gap = (xi - wall_now[w, U(0)]) * nx + (yi - wall_now[w, U(1)]) * ny + (zi - wall_now[w, U(2)]) * nz
             overlap = a - gap
-            if overlap <= 0.0:
+            if overlap <= -(wall_hist[i, w, U(3)] if wwide else 0.0):
                 # the spring of a wall contact that ended is reset; wall_touch[i, w] False means it is zero
                 # already, which spares reading wall_hist (N × W × 3) for every particle and wall each step
                 if update and wall_touch[i, w]:
                     wall_hist[i, w, U(0)] = 0.0
                     wall_hist[i, w, U(1)] = 0.0
                     wall_hist[i, w, U(2)] = 0.0
+                    if wwide:
+                        wall_hist[i, w, U(3)] = 0.0
                     wall_touch[i, w] = False
+                continue
+            if wext:
+                fn, ftx, fty, ftz, hx, hy, hz, reach, mx, my, mz = contact_force_full(
+                    _law_full(pw, U(species[i]), w), overlap, nx, ny, nz,
+                    vel[i, U(0)] - wall_now[w, U(3)], vel[i, U(1)] - wall_now[w, U(4)],
+                    (0.0 if flat else vel[i, U(2)]) - wall_now[w, U(5)],
+                    0.0 if flat else a * omega[i, U(0)], 0.0 if flat else a * omega[i, U(1)], a * omega[i, U(2)],
+                    0.0 if flat else omega[i, U(0)], 0.0 if flat else omega[i, U(1)], omega[i, U(2)], mass[i], a,
+                    dt, wall_hist[i, w, U(0)], wall_hist[i, w, U(1)], wall_hist[i, w, U(2)], update)
+                if update:
+                    wall_hist[i, w, U(0)] = hx
+                    wall_hist[i, w, U(1)] = hy
+                    wall_hist[i, w, U(2)] = hz
+                    if wwide:
+                        wall_hist[i, w, U(3)] = reach
+                    wall_touch[i, w] = True
+                # the rolling torque per unit lever (the radius a), as the sums hold it
+                sum_f[i, U(0)] += fn * nx + ftx
+                sum_f[i, U(1)] += fn * ny + fty
+                sum_c[i, U(2)] -= nx * fty - ny * ftx - mz / a
+                if not flat:
+                    sum_f[i, U(2)] += fn * nz + ftz
+                    sum_c[i, U(0)] -= ny * ftz - nz * fty - mx / a
+                    sum_c[i, U(1)] -= nz * ftx - nx * ftz - my / a
                 continue
             # wall_contact written out (an inlined helper taking arrays made Numba copy array references: an
             # atomic reference-count increment and decrement per particle and wall)
@@ -435,6 +475,8 @@ def touching_walls(wall_hist):
     for i in range(n):
         for w in range(nw):
             out[i, w] = (wall_hist[i, w, 0] != 0.0) | (wall_hist[i, w, 1] != 0.0) | (wall_hist[i, w, 2] != 0.0)
+            if wall_hist.shape[2] > 3:
+                out[i, w] |= wall_hist[i, w, 3] != 0.0
     return out
 
 
@@ -483,6 +525,7 @@ def _near_range(lo, hi, ref_pos, radius, wall_point0, wall_normal, moving, reach
                 near_wall):
     """``near_walls`` for particles lo..hi−1."""
     nw = wall_normal.shape[0]
+    wide = wall_hist.shape[2] > 3  # an adhesive wall law's column of formed contacts
     for i_ in range(lo, hi):
         i = U(i_)
         x = ref_pos[i, U(0)]
@@ -495,6 +538,8 @@ def _near_range(lo, hi, ref_pos, radius, wall_point0, wall_normal, moving, reach
             gap = ((x - wall_point0[w, U(0)]) * wall_normal[w, U(0)] + (y - wall_point0[w, U(1)]) * wall_normal[w, U(1)]
                    + (z - wall_point0[w, U(2)]) * wall_normal[w, U(2)])
             touch = (wall_hist[i, w, U(0)] != 0.0) | (wall_hist[i, w, U(1)] != 0.0) | (wall_hist[i, w, U(2)] != 0.0)
+            if wide:
+                touch |= wall_hist[i, w, U(3)] != 0.0
             if moving[w] or gap < a + reach[w]:
                 near_wall[i, U(c)] = w
                 c += 1
@@ -502,6 +547,8 @@ def _near_range(lo, hi, ref_pos, radius, wall_point0, wall_normal, moving, reach
                 wall_hist[i, w, U(0)] = 0.0
                 wall_hist[i, w, U(1)] = 0.0
                 wall_hist[i, w, U(2)] = 0.0
+                if wide:
+                    wall_hist[i, w, U(3)] = 0.0
                 touch = False
             wall_touch[i, w] = touch
         near_count[i] = c
@@ -651,7 +698,7 @@ def reorder(pos, vel, omega, force, torque, radius, mass, inertia, inv_mass, inv
         _permute(b.reshape((n, 1)), order)
     _permute(species.reshape((n, 1)), order)
     _permute(ids.reshape((n, 1)), order)
-    _permute(wall_hist.reshape((n, wall_hist.shape[1] * 3)), order)
+    _permute(wall_hist.reshape((n, wall_hist.shape[1] * wall_hist.shape[2])), order)
     row_start, partner, hist = renumber_pairs(row_start, partner, hist, new_index)
     return order, row_start, partner, hist
 

@@ -35,9 +35,11 @@ class SoftSphereEngine(ParticleEngine):
         # velocity where the force is evaluated (each sub-step); zero unless a coupling sets it
         self.ext_damping = np.zeros(st.n)
         self.pp, self.pw, self.contact_times = self._contact_tables()
-        self.wall_hist = np.zeros((st.n, len(self.walls.planes), 3))
+        # an adhesive law keeps each formed contact's pull-off distance in a fourth history column
+        self.wall_hist = np.zeros((st.n, len(self.walls.planes), 4 if self.wall_adhesive else 3))
         dmax = 2.0 * st.radius.max() if st.n else 0.0
         self.skin = case.neighbours.skin if case.neighbours.skin is not None else 0.25 * dmax
+        self._check_pull_off()
         self.dt = self._time_step()
         self.time = 0.0
         self.steps = 0
@@ -50,7 +52,7 @@ class SoftSphereEngine(ParticleEngine):
         self.ref_pos = st.position.copy()
         self.row_start, self.partner, self.slab_start, self.slab_members = build_pairs(
             st.position, st.radius, self.skin, self.dim2)
-        self.hist = np.zeros((self.partner.shape[0], 3))
+        self.hist = np.zeros((self.partner.shape[0], 4 if self.pair_adhesive else 3))
         contacts_first(st.position, st.radius, self.row_start, self.partner, self.hist)  # as every rebuild leaves it
         self._reach_walls()
         self.reorder_listeners = []  # callables f(order) told of each renumbering (new k is former order[k])
@@ -68,10 +70,19 @@ class SoftSphereEngine(ParticleEngine):
         # the lightest particle of each species sets the shortest contact time
         m_min = np.array([st.mass[st.species == k].min() if np.any(st.species == k) else np.inf for k in range(ns)])
         r_min = np.array([st.radius[st.species == k].min() if np.any(st.species == k) else np.inf for k in range(ns)])
+        r_max = np.array([st.radius[st.species == k].max() if np.any(st.species == k) else 0.0 for k in range(ns)])
+        self.pair_adhesive = self.wall_adhesive = False
+        self.pull_offs = []  # (largest pull-off distance [m], what) of each adhesive law
         for a in range(ns):
             for b in range(ns):
                 law = self.law_for_pair(a, b)
                 pp[a, b] = law.pack(sp[a], sp[b])
+                if law.adhesive:
+                    self.pair_adhesive = True
+                    if r_max[a] > 0.0 and r_max[b] > 0.0:
+                        r_eff = r_max[a] * r_max[b] / (r_max[a] + r_max[b])
+                        self.pull_offs.append((law.pull_off_distance(r_eff, sp[a], sp[b]),
+                                               f"species {sp[a].name}–{sp[b].name}"))
                 if np.isfinite(m_min[a]) and np.isfinite(m_min[b]):
                     m_eff = m_min[a] * m_min[b] / (m_min[a] + m_min[b])
                     r_eff = r_min[a] * r_min[b] / (r_min[a] + r_min[b])
@@ -79,10 +90,27 @@ class SoftSphereEngine(ParticleEngine):
             for w, plane in enumerate(self.walls.planes):
                 law = self.law_for_wall(plane, a)
                 pw[a, w] = law.pack(sp[a], plane.source)
+                if law.adhesive:
+                    self.wall_adhesive = True
+                    if r_max[a] > 0.0:
+                        self.pull_offs.append((law.pull_off_distance(r_max[a], sp[a], plane.source),
+                                               f"species {sp[a].name}–wall {plane.name}"))
                 if np.isfinite(m_min[a]):
                     times.append((law.contact_time(m_min[a], r_min[a], v, sp[a], plane.source),
                                   f"species {sp[a].name}–wall {plane.name}"))
         return pp, pw, times
+
+    def _check_pull_off(self) -> None:
+        """An adhesive contact lasts until its pull-off distance, so the Verlet list must keep pairs (and the
+        wall reach must keep walls) that far apart: refuse a skin below the largest pull-off distance."""
+        if not self.pull_offs:
+            return
+        dist, what = max(self.pull_offs)
+        if dist >= self.skin:
+            raise CaseError(
+                f"neighbours.skin = {self.skin:.4g} m is below the pull-off distance {dist:.4g} m of the adhesive "
+                f"contact of {what}: a contact pulled apart would leave the neighbour list before it breaks; "
+                f"set neighbours.skin above {dist:.4g} m")
 
     def _reach_walls(self) -> None:
         """The walls each particle can reach before the next list rebuild, from ``ref_pos`` (``K.near_walls``):

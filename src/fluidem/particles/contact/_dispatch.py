@@ -9,6 +9,10 @@ that model. A force-based model's module defines ``CODE`` (a unique integer) and
 model's coefficients: normal spring + dashpot (Sun 2007 eq. 21), tangential
 spring + dashpot with history (eqs 19–20, 22) truncated at the Coulomb limit.
 
+``contact_force_full`` is the same for every law, adhesive ones included, and adds the rolling-resistance
+torque; the kernels use it where a table has rolling friction, an adhesive law or a variant code of a law
+(slots 8 and 10 of ``base.py``), so that the plain code, and its results, stay as they are everywhere else.
+
 ``contact_force`` is written without data-dependent branches: the rescaling of the
 rotated spring, the Coulomb truncation and the spring reset on slip are computed for
 every contact and chosen by conditional expressions (selects). The values are those
@@ -28,26 +32,95 @@ from .base import contact_models
 TINY = 1e-300  # guards a division whose result a select then drops (no inf or NaN is formed)
 
 
-def _force_laws() -> dict:
-    """{CODE: coefficients kernel} of every registered force-based contact model."""
+def _force_laws(full: bool) -> dict:
+    """{code: coefficients kernel} of the registered force-based contact models: with ``full``, every code of
+    every model (its ``code`` and its ``extra_codes``), else the ``code`` of each non-adhesive model only (the
+    plain code's laws, as they were before variants and adhesive laws existed)."""
     laws = {}
     for name in contact_models.names():
         cls = contact_models.get(name)
-        if cls.instantaneous:
+        if cls.instantaneous or (cls.adhesive and not full):
             continue
         module = sys.modules[cls.__module__]
-        kernel = getattr(module, "coefficients", None)
-        if kernel is None:
-            raise TypeError(f"contact model {name!r}: its module {cls.__module__} defines no coefficients() kernel")
-        if cls.code in laws:
-            raise ValueError(f"contact model {name!r}: code {cls.code} is taken by another model")
-        laws[cls.code] = kernel
+        for code, kernel_name in ((cls.code, "coefficients"), *(cls.extra_codes.items() if full else ())):
+            kernel = getattr(module, kernel_name, None)
+            if kernel is None:
+                raise TypeError(f"contact model {name!r}: its module {cls.__module__} defines no {kernel_name}() kernel")
+            if code in laws:
+                raise ValueError(f"contact model {name!r}: code {code} is taken by another model")
+            laws[code] = kernel
     return laws
 
 
-# (elastic normal force [N], η_n [N s/m], k_t [N/m], η_t [N s/m]) of the model coded in p[0]
-coefficients = compiled_switch("coefficients", _force_laws(), ("p", "overlap", "m_eff", "r_eff"), "int(p[0])",
+def _pull_offs() -> dict:
+    """{CODE: pull_off kernel} of every registered adhesive contact model."""
+    out = {}
+    for name in contact_models.names():
+        cls = contact_models.get(name)
+        if cls.adhesive:
+            kernel = getattr(sys.modules[cls.__module__], "pull_off", None)
+            if kernel is None:
+                raise TypeError(f"contact model {name!r}: an adhesive law needs a pull_off(p, r_eff) kernel")
+            out[cls.code] = kernel
+    return out
+
+
+# (elastic normal force [N], η_n [N s/m], k_t [N/m], η_t [N s/m]) of the model coded in p[0]: the plain pair and
+# wall code (vectorised over contacts) sees the main code of each non-adhesive law only (a further branch changes
+# the vector code LLVM makes of the others, and with fastmath their round-off); ``contact_force_full`` sees all
+coefficients = compiled_switch("coefficients", _force_laws(False), ("p", "overlap", "m_eff", "r_eff"), "int(p[0])",
                                "0.0, 0.0, 0.0, 0.0", __name__, __file__, error_model="numpy", inline="always")
+full_coefficients = compiled_switch("full_coefficients", _force_laws(True), ("p", "overlap", "m_eff", "r_eff"),
+                                    "int(p[0])", "0.0, 0.0, 0.0, 0.0", __name__, __file__, error_model="numpy",
+                                    inline="always")
+# (pull-off force F_c [N], pull-off distance |δ_c| [m]) of an adhesive law; (0, 0) for the others
+pull_off = compiled_switch("pull_off", _pull_offs(), ("p", "r_eff"), "int(p[0])", "0.0, 0.0", __name__, __file__,
+                           error_model="numpy", inline="always")
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _tangential(flim, k_t, eta_t, vn, nx, ny, nz, vx, vy, vz, wx, wy, wz, dt, hx, hy, hz, update):
+    """Tangential force on i and the new spring of a contact (Sun 2007 eqs 19–20, 22), limited to flim [N]."""
+    # relative tangential velocity of the contact point, Sun 2007 eq. 19
+    cx = wy * nz - wz * ny
+    cy = wz * nx - wx * nz
+    cz = wx * ny - wy * nx
+    tx = vx - vn * nx - cx
+    ty = vy - vn * ny - cy
+    tz = vz - vn * nz - cz
+    # keep the history in the current tangent plane with its magnitude (rigid rotation, eq. 20)
+    hn = hx * nx + hy * ny + hz * nz
+    h2 = hx * hx + hy * hy + hz * hz
+    hx -= hn * nx
+    hy -= hn * ny
+    hz -= hn * nz
+    h2p = hx * hx + hy * hy + hz * hz
+    s = math.sqrt(h2 / max(h2p, TINY))
+    s = s if h2p > 0.0 else 1.0
+    du = dt if update else 0.0
+    hx = hx * s + tx * du
+    hy = hy * s + ty * du
+    hz = hz * s + tz * du
+    ftx = -k_t * hx - eta_t * tx  # Sun 2007 eq. 22
+    fty = -k_t * hy - eta_t * ty
+    ftz = -k_t * hz - eta_t * tz
+    # Coulomb limit: on slip the force is scaled to flim and the spring reset to match it
+    ft2 = ftx * ftx + fty * fty + ftz * ftz
+    slip = ft2 > flim * flim
+    s = flim / math.sqrt(max(ft2, TINY))
+    s = s if slip else 1.0
+    ftx *= s
+    fty *= s
+    ftz *= s
+    kt = max(k_t, TINY)
+    keep = 1.0 if k_t > 0.0 else 0.0  # a spring without stiffness holds nothing
+    gx = -(ftx + eta_t * tx) / kt * keep
+    gy = -(fty + eta_t * ty) / kt * keep
+    gz = -(ftz + eta_t * tz) / kt * keep
+    hx = gx if slip else hx
+    hy = gy if slip else hy
+    hz = gz if slip else hz
+    return ftx, fty, ftz, hx, hy, hz
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -72,44 +145,35 @@ def contact_force(p, overlap, nx, ny, nz, vx, vy, vz, wx, wy, wz, m_eff, r_eff, 
     fel, eta_n, k_t, eta_t = coefficients(p, overlap, m_eff, r_eff)
     vn = vx * nx + vy * ny + vz * nz
     fn = fel - eta_n * vn  # Sun 2007 eq. 21 (unclamped, as eqs 25-26 assume)
-    # relative tangential velocity of the contact point, Sun 2007 eq. 19
-    cx = wy * nz - wz * ny
-    cy = wz * nx - wx * nz
-    cz = wx * ny - wy * nx
-    tx = vx - vn * nx - cx
-    ty = vy - vn * ny - cy
-    tz = vz - vn * nz - cz
-    # keep the history in the current tangent plane with its magnitude (rigid rotation, eq. 20)
-    hn = hx * nx + hy * ny + hz * nz
-    h2 = hx * hx + hy * hy + hz * hz
-    hx -= hn * nx
-    hy -= hn * ny
-    hz -= hn * nz
-    h2p = hx * hx + hy * hy + hz * hz
-    s = math.sqrt(h2 / max(h2p, TINY))
-    s = s if h2p > 0.0 else 1.0
-    du = dt if update else 0.0
-    hx = hx * s + tx * du
-    hy = hy * s + ty * du
-    hz = hz * s + tz * du
-    ftx = -k_t * hx - eta_t * tx  # Sun 2007 eq. 22
-    fty = -k_t * hy - eta_t * ty
-    ftz = -k_t * hz - eta_t * tz
-    # Coulomb limit: on slip the force is scaled to mu |F_n| and the spring reset to match it
-    ft2 = ftx * ftx + fty * fty + ftz * ftz
-    flim = p[7] * max(fn, 0.0)
-    slip = ft2 > flim * flim
-    s = flim / math.sqrt(max(ft2, TINY))
-    s = s if slip else 1.0
-    ftx *= s
-    fty *= s
-    ftz *= s
-    kt = max(k_t, TINY)
-    keep = 1.0 if k_t > 0.0 else 0.0  # a spring without stiffness holds nothing
-    gx = -(ftx + eta_t * tx) / kt * keep
-    gy = -(fty + eta_t * ty) / kt * keep
-    gz = -(ftz + eta_t * tz) / kt * keep
-    hx = gx if slip else hx
-    hy = gy if slip else hy
-    hz = gz if slip else hz
+    ftx, fty, ftz, hx, hy, hz = _tangential(p[7] * max(fn, 0.0), k_t, eta_t, vn, nx, ny, nz, vx, vy, vz, wx, wy, wz,
+                                            dt, hx, hy, hz, update)
     return fn, ftx, fty, ftz, hx, hy, hz
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def contact_force_full(p, overlap, nx, ny, nz, vx, vy, vz, wx, wy, wz, rx, ry, rz, m_eff, r_eff, dt, hx, hy, hz,
+                       update):
+    """``contact_force`` for every law, adhesive ones included, with rolling resistance.
+
+    As ``contact_force``, and: ``overlap`` may be negative for an adhesive law (a formed contact pulled
+    apart, down to its pull-off distance); r : ω_i − ω_j [rad/s], the relative spin (ω_i against a wall).
+
+    Returns
+    -------
+    (fn, ftx, fty, ftz, hx, hy, hz, reach, mx, my, mz): as ``contact_force``; reach: the pull-off distance
+    |δ_c| [m] of an adhesive law (0 otherwise), down to which the contact lasts; m: rolling-resistance torque
+    on i [N m] (−m on j), the constant directional torque −μ_r R* F ω_r/|ω_r| (Ai et al. 2011 model A;
+    LIGGGHTS ``rolling_friction cdt``) with the load F = max(F_n + 2 F_c, 0) that also sets the Coulomb limit
+    μ F (F_c the pull-off force, Thornton & Yin 1991; F = max(F_n, 0) for a non-adhesive law).
+    """
+    fel, eta_n, k_t, eta_t = full_coefficients(p, overlap, m_eff, r_eff)
+    f_c, reach = pull_off(p, r_eff)
+    vn = vx * nx + vy * ny + vz * nz
+    fn = fel - eta_n * vn  # Sun 2007 eq. 21
+    load = max(fn + 2.0 * f_c, 0.0)
+    ftx, fty, ftz, hx, hy, hz = _tangential(p[7] * load, k_t, eta_t, vn, nx, ny, nz, vx, vy, vz, wx, wy, wz,
+                                            dt, hx, hy, hz, update)
+    spin = math.sqrt(rx * rx + ry * ry + rz * rz)
+    mr = p[8] * r_eff * load / max(spin, TINY)
+    mr = mr if spin > 0.0 else 0.0
+    return fn, ftx, fty, ftz, hx, hy, hz, reach, -mr * rx, -mr * ry, -mr * rz

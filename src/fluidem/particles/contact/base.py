@@ -4,30 +4,47 @@ The compiled kernels see a contact law as one float64 row per (species, species)
 or (species, wall) pair. Slot meanings are fixed here; each model documents how
 it fills them:
 
-====  =====================  ============================================
-slot  linear_spring_dashpot  hertz_mindlin
-====  =====================  ============================================
-0     CODE (1)               CODE (2)
-1     k_n [N/m]              E* [Pa]
-2     k_t [N/m]              G* [Pa]
-3     zeta_n [-]             A [-] (dimensionless Hertz damping)
-4     eta_n fixed [N s/m]    A sqrt(4/3 E*)  (derived)
-5     eta_t / eta_n [-]      A sqrt(16/3 G*) (derived)
-6     unused                 unused
-7     friction mu [-]        friction mu [-]
-====  =====================  ============================================
+====  =====================  ============================================  ==============================
+slot  linear_spring_dashpot  hertz_mindlin                                 hertz_mindlin_jkr
+====  =====================  ============================================  ==============================
+0     CODE (1; 4 Hertzian)   CODE (2)                                      CODE (5)
+1     k_n [N/m]              E* [Pa]                                       E* [Pa]
+2     k_t [N/m]              G* [Pa]                                       G* [Pa]
+3     zeta_n [-]             A [-] (dimensionless Hertz damping)           A [-]
+4     eta_n fixed [N s/m]    A sqrt(4/3 E*)  (derived)                     A sqrt(4/3 E*)
+5     eta_t / eta_n [-]      A sqrt(16/3 G*) (derived)                     A sqrt(16/3 G*)
+6     unused                 unused                                        surface energy gamma [J/m^2]
+7     friction mu [-]        friction mu [-]                               friction mu [-]
+====  =====================  ============================================  ==============================
+
+Slots 8 and up are the same for every force-based law:
+
+====  ==============================================================================
+8     rolling friction mu_r [-] (0: no rolling resistance)
+9     rolling model (ROLLING_CDT = 1: constant directional torque)
+10    1.0 for a row that needs the extended code: an adhesive law (its contacts outlast touch) or a
+      variant code of a law (``extra_codes``); else 0.0
+11    unused
+====  ==============================================================================
+
+A row whose slots 8 and 10 are zero runs the plain pair and wall code, the same
+compiled code, and the same numbers, as before those slots existed; a non-zero
+slot 8 or 10 in any row of a table selects the extended code (rolling torques,
+adhesive contacts, variant laws) for that table.
 """
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import ClassVar, Literal
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
 from ...registry import Registry
 
-N_SLOTS = 8
+N_SLOTS = 12
 SLOT_CODE, SLOT_FRICTION = 0, 7
+SLOT_ROLLING_FRICTION, SLOT_ROLLING_MODEL, SLOT_EXTENDED = 8, 9, 10  # SLOT_EXTENDED: slot 10 below
+ROLLING_CDT = 1  # rolling model code: constant directional torque
 
 contact_models: Registry[type["ContactModel"]] = Registry("contact model")
 
@@ -41,6 +58,12 @@ class ContactModel(BaseModel):
     friction: float = Field(0.3, ge=0.0, description="Coulomb friction coefficient mu [-]")
 
     code: ClassVar[int] = 0
+    # further codes the model packs for variants of its law, each with its own kernel in the model's module:
+    # {code: name of the coefficients kernel}; a row with such a code sets slot 10 (the extended code runs it)
+    extra_codes: ClassVar[dict] = {}
+    # an adhesive law: contacts persist into negative overlap down to the law's pull-off distance (its module
+    # defines ``pull_off(p, r_eff)``), per-contact state in a fourth history column
+    adhesive: ClassVar[bool] = False
     instantaneous: ClassVar[bool] = False  # True: hard-sphere collisions, handled by the event-driven engine
     # the test that checks this law against an analytic or published result (a function name under tests/)
     reference_test: ClassVar[str] = ""
@@ -55,6 +78,27 @@ class ContactModel(BaseModel):
     def contact_time(self, m_eff: float, r_eff: float, impact_velocity: float, body_i, body_j) -> float:
         """Duration of a head-on collision [s] used to choose the time step."""
         raise NotImplementedError
+
+
+class SoftContactModel(ContactModel):
+    """A force-based law: adds the rolling resistance shared by every soft-sphere law."""
+
+    rolling_friction: float = Field(
+        0.0, ge=0.0, description="rolling friction coefficient mu_r [-]: a torque mu_r R* |F_n| against the relative "
+                                 "spin (0: no rolling resistance)")
+    rolling_model: Literal["cdt"] = Field(
+        "cdt", description="rolling resistance model: 'cdt', the constant directional torque (Ai et al. 2011 model A, "
+                           "LIGGGHTS rolling_friction cdt)")
+
+    def pack_rolling(self, row: np.ndarray) -> np.ndarray:
+        """Fill the rolling slots of a packed row (slots 8-9); returns the row."""
+        row[SLOT_ROLLING_FRICTION] = self.rolling_friction
+        row[SLOT_ROLLING_MODEL] = ROLLING_CDT if self.rolling_friction > 0.0 else 0.0
+        return row
+
+    def pull_off_distance(self, r_eff: float, body_i, body_j) -> float:
+        """Separation beyond touch [m] down to which a contact of this law lasts (0: it ends at touch)."""
+        return 0.0
 
 
 class Material(BaseModel):

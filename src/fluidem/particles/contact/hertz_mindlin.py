@@ -11,7 +11,7 @@ The damping constant A is not taken from an approximate formula: with the scalin
 δ = L y, t = T s the normal equation becomes y'' = −y^(3/2) − A y^(1/4) y', whose
 restitution depends on A alone. We integrate it once (SciPy) and solve e(A) = e_n
 exactly, so the requested restitution is met at every impact speed.
-Valid for small overlaps δ ≪ R*; not an adhesive (JKR) law.
+Valid for small overlaps δ ≪ R*; not an adhesive law (that is ``hertz_mindlin_jkr``).
 """
 from __future__ import annotations
 
@@ -23,7 +23,7 @@ import numpy as np
 from numba import njit
 from pydantic import Field
 
-from .base import ContactModel, contact_models, empty_row
+from .base import SoftContactModel, contact_models, empty_row
 
 CODE = 2
 
@@ -81,7 +81,7 @@ def contact_time_hertz(m_eff, r_eff, e_star, impact_velocity, restitution=1.0) -
 
 
 @contact_models.register("hertz_mindlin")
-class HertzMindlin(ContactModel):
+class HertzMindlin(SoftContactModel):
     """Hertz normal + Mindlin tangential stiffness with restitution-calibrated damping and Coulomb friction."""
 
     model: Literal["hertz_mindlin"] = "hertz_mindlin"
@@ -110,7 +110,7 @@ class HertzMindlin(ContactModel):
         # precomputed damping factors: η_n = A sqrt(4/3 E*) sqrt(m* a), η_t = A sqrt(16/3 G*) sqrt(m* a), a = sqrt(R* δ)
         row[4] = a * math.sqrt(4.0 / 3.0 * e_star)
         row[5] = a * math.sqrt(16.0 / 3.0 * g_star)
-        return row
+        return self.pack_rolling(row)
 
     def contact_time(self, m_eff, r_eff, impact_velocity, body_i=None, body_j=None) -> float:
         e_star, _ = self._moduli(body_i, body_j)

@@ -134,6 +134,8 @@ def test_a_mutated_case_validates_or_is_refused_naming_a_key(mutation):
     dumped = case.model_dump(mode="python")
     bad = [p for p in non_finite(dumped) if not (p[-1] == "duration" and dumped and get(dumped, p) == math.inf)]
     assert not bad, f"{key}: non-finite numbers in a validated case at {bad}"
+    if kind == "non_finite" and key.endswith(".duration") and get(data, key.split(".")) == math.inf:
+        return  # a pulse that lasts for ever: the one key where inf is a value
     assert kind not in ("unknown_key", "non_finite"), f"{kind} mutation at {key} was accepted"
 
 

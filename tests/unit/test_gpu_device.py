@@ -105,3 +105,15 @@ def test_gpu_kernels_compile_to_ptx():
                        capture_output=True, text=True, timeout=SIMULATOR_TIMEOUT)
     assert r.returncode == 0, (r.stdout + r.stderr)[-3000:]
     assert r.stdout.count("characters of PTX") == 8, r.stdout
+
+
+def test_contact_physics_the_gpu_path_lacks_is_refused_by_name():
+    """JKR adhesion, rolling resistance and the Hertzian linear variant run on the CPU engine only."""
+    from fluidem.case import load_case
+    from fluidem.particles.softsphere_gpu import gpu_refusals
+
+    assert gpu_refusals(load_case("pour")) == []
+    rolling = gpu_refusals(load_case("pour", {"particles.contact.rolling_friction": 0.2}))
+    assert rolling == ["particles.contact.rolling_friction = 0.2 (rolling resistance)"]
+    hertzian = gpu_refusals(load_case("pour", {"particles.contact.nonlinearity": "hertzian"}))
+    assert hertzian == ["particles.contact.nonlinearity = 'hertzian' (Sun 2007's Hertzian linear law)"]

@@ -47,6 +47,24 @@ def gpu_refusals(case) -> list[str]:
                    "on the CPU only)")
     if case.gas is not None:
         out.append("a [gas] section (the gas-particle coupling runs on the CPU only)")
+    found = set()
+
+    def visit(node, path):  # every contact law of the case: the default, the wall law, the override tables
+        if isinstance(node, dict):
+            if node.get("model") == "hertz_mindlin_jkr":
+                found.add(f"{path}.model = 'hertz_mindlin_jkr' (JKR adhesion)")
+            if (node.get("rolling_friction") or 0.0) > 0.0:
+                found.add(f"{path}.rolling_friction = {node['rolling_friction']:g} (rolling resistance)")
+            if node.get("nonlinearity") not in (None, "none"):
+                found.add(f"{path}.nonlinearity = {node['nonlinearity']!r} (Sun 2007's Hertzian linear law)")
+            for k, v in node.items():
+                visit(v, f"{path}.{k}" if path else k)
+        elif isinstance(node, list):
+            for i, v in enumerate(node):
+                visit(v, f"{path}.{i}")
+
+    visit(case.model_dump(mode="python", include={"particles", "walls"}), "")
+    out.extend(sorted(found))
     return out
 
 

@@ -33,7 +33,7 @@ def device_function(kernel, **names):
 
 def _device_laws() -> dict:
     """{CODE: device coefficients} of every registered force-based contact model."""
-    return {code: device_function(kernel) for code, kernel in _dispatch._force_laws().items()}
+    return {code: device_function(kernel) for code, kernel in _dispatch._force_laws(False).items()}
 
 
 # (elastic normal force [N], η_n [N s/m], k_t [N/m], η_t [N s/m]) of the model coded in p[0]

@@ -31,7 +31,7 @@ import math
 from typing import Any, Callable, ClassVar, Union
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from ...errors import CaseError
 from ...registry import Registry
@@ -179,6 +179,38 @@ def fastest(value) -> float:
     if isinstance(value, (Pulse, Table)):
         return value.fastest()
     return abs(evaluate(value, 0.0))
+
+
+class InflowVelocity(Model):
+    """One inflow velocity of a piece of an inflow side (a segment, a patch): give exactly one of
+    ``interstitial`` and ``superficial``, positive into the domain [m/s]; a superficial velocity is
+    converted with the voidage of its side (Hoomans 1996 §5.2: superficial = voidage × interstitial)."""
+
+    interstitial: Value | None = Field(None, description="interstitial inflow velocity [m/s]")
+    superficial: Value | None = Field(None, description="superficial inflow velocity [m/s] (interstitial × the "
+                                                        "side's voidage)")
+
+    @field_validator("interstitial", "superficial", mode="before")
+    @classmethod
+    def _velocity_number(cls, v):
+        return None if v is None else check_number(v)
+
+    @model_validator(mode="after")
+    def _one_velocity(self):
+        if (self.interstitial is None) == (self.superficial is None):
+            raise ValueError("give exactly one of interstitial= or superficial= (got interstitial="
+                             f"{self.interstitial!r}, superficial={self.superficial!r})")
+        return self
+
+    def interstitial_velocity(self, t: float, voidage: float) -> float:
+        """Interstitial velocity [m/s] at time ``t`` [s]: superficial / voidage when given as superficial."""
+        if self.interstitial is not None:
+            return evaluate(self.interstitial, t)
+        return evaluate(self.superficial, t) / voidage
+
+    @property
+    def time_dependent(self) -> bool:
+        return callable(self.interstitial) or callable(self.superficial)
 
 
 class BoundaryCondition(Model):

@@ -9,13 +9,13 @@ from pydantic import Field, field_validator, model_validator
 
 from ...errors import CaseError
 from ..grid import INFLOW
-from .base import BoundaryCondition, Model, Value, boundary_conditions, check_number, evaluate, fastest
+from .base import BoundaryCondition, InflowVelocity, Value, boundary_conditions, check_number, fastest
 from .patches import Circle, Rectangle, overlap
 
 PatchChoice = Annotated[Union[Rectangle, Circle], Field(discriminator="shape")]
 
 
-class Segment(Model):
+class Segment(InflowVelocity):
     """One stretch of an inflow side with one velocity: the background or an orifice/jet.
 
     Parameters
@@ -32,35 +32,20 @@ class Segment(Model):
         x on the other sides) and the segment spans the whole of the second (a slot).
     """
 
-    interstitial: Value | None = Field(None, description="interstitial inflow velocity [m/s]")
-    superficial: Value | None = Field(None, description="superficial inflow velocity [m/s] (interstitial × voidage)")
     start: float | None = Field(None, description="[m] along the side (x on bottom/top, y on left/right); "
                                                   "default its start")
     end: float | None = Field(None, description="[m] along the side; default its end")
 
-    @field_validator("interstitial", "superficial", "start", "end", mode="before")
+    @field_validator("start", "end", mode="before")
     @classmethod
     def _number(cls, v):
         return None if v is None else check_number(v)
 
     @model_validator(mode="after")
-    def _one_velocity(self):
-        if (self.interstitial is None) == (self.superficial is None):
-            raise ValueError("give exactly one of interstitial= or superficial= (got interstitial="
-                             f"{self.interstitial!r}, superficial={self.superficial!r})")
+    def _extent(self):
         if self.start is not None and self.end is not None and not self.end > self.start:
             raise ValueError(f"end = {self.end!r} must exceed start = {self.start!r} [m]")
         return self
-
-    def interstitial_velocity(self, t: float, voidage: float) -> float:
-        """Interstitial velocity [m/s] at time ``t`` [s]: superficial / voidage when given as superficial."""
-        if self.interstitial is not None:
-            return evaluate(self.interstitial, t)
-        return evaluate(self.superficial, t) / voidage
-
-    @property
-    def time_dependent(self) -> bool:
-        return callable(self.interstitial) or callable(self.superficial)
 
 
 @boundary_conditions.register("inflow")

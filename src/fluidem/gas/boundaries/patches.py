@@ -19,7 +19,7 @@ from typing import Literal
 import numpy as np
 from pydantic import Field, field_validator, model_validator
 
-from .base import Model, Value, check_number, evaluate
+from .base import InflowVelocity
 
 
 def _arcsin_area(u, r):
@@ -55,35 +55,8 @@ def circle_rectangle_area(x0, x1, y0, y1, radius):
     return np.where(inside, top - bottom, 0.0).sum(axis=-1)
 
 
-class Patch(Model):
-    """Base of the inflow patches: one velocity over a shape of the side (give exactly one of
-    ``interstitial`` and ``superficial``, positive into the domain [m/s])."""
-
-    interstitial: Value | None = Field(None, description="interstitial inflow velocity [m/s]")
-    superficial: Value | None = Field(None, description="superficial inflow velocity [m/s] (interstitial × the "
-                                                        "side's voidage)")
-
-    @field_validator("interstitial", "superficial", mode="before")
-    @classmethod
-    def _number(cls, v):
-        return None if v is None else check_number(v)
-
-    @model_validator(mode="after")
-    def _one_velocity(self):
-        if (self.interstitial is None) == (self.superficial is None):
-            raise ValueError("give exactly one of interstitial= or superficial= (got interstitial="
-                             f"{self.interstitial!r}, superficial={self.superficial!r})")
-        return self
-
-    def interstitial_velocity(self, t: float, voidage: float) -> float:
-        """Interstitial velocity [m/s] at time ``t`` [s]: superficial / voidage when given as superficial."""
-        if self.interstitial is not None:
-            return evaluate(self.interstitial, t)
-        return evaluate(self.superficial, t) / voidage
-
-    @property
-    def time_dependent(self) -> bool:
-        return callable(self.interstitial) or callable(self.superficial)
+class Patch(InflowVelocity):
+    """Base of the inflow patches: one velocity (``InflowVelocity``) over a shape of the side."""
 
     def fractions(self, edges_a: np.ndarray, edges_b: np.ndarray) -> np.ndarray:
         """(n_a, n_b) fraction of each boundary face's area inside the patch, for the face edges ``edges_a``,

@@ -28,9 +28,11 @@ Start-up (Hoomans §4.1, the case files): 0 to T0 = 0.5 s the lattice under the 
 (4.5 m/s interstitial on every bottom cell); from T0 the case's inflow, to T0 + 1 s. Without the jet the
 ideal bed settles at 129.3-129.4 mm (mean particle height over T0-0.2 to T0, three runs) without
 bubbles; the non-ideal bed lifts to 151.9-158.4 mm and already bubbles at the u_mf background (from
-T0-0.26 s, up to 96-180 cm2, slugs in 0-4 snapshots): in this model the settled 2D bed's voidage after
-eq. 49 is ~0.35-0.38, where eq. 35 carries the particles at 1.1-1.4 m/s superficial, below the 1.8 m/s
-background (Hoomans' 1.77 m/s u_mf is Wen & Yu's correlation, which assumes a 3D bed's ε_mf).
+T0-0.26 s, up to 96-180 cm2, slugs in 0-4 snapshots): in this model the settled 2D bed's lower cells have
+an eq-49 voidage of 0.31-0.33, where eqs 35-39 carry the particles at 0.78-0.93 m/s; a slow velocity sweep
+lifts the bed from about 1.0 m/s and finds bubbles in every probe row from 1.8 m/s, the case's background
+(``tests/validation/hoomans_bubbles.py``; docs/gallery.md). Hoomans' 1.77 m/s u_mf is Wen & Yu's
+correlation, which assumes a 3D bed's ε_mf of about 0.415.
 
 Criteria, evaluated on every gas snapshot (``gas.h5``, every 10 ms, 101 from T0 on) with the functions of
 ``fluidem.analysis.fluidised``, from the jet onset ``CHECK_FROM`` = T0 on:

@@ -286,7 +286,9 @@ def test_killed_sweep_resumes_without_rerunning_finished_members(tmp_path):
 
 def test_ctrl_c_stops_the_study_and_keeps_finished_members(tmp_path):
     study = tmp_path / "study"
-    proc = start_sweep(study, "0.1", tmp_path)
+    # members of 1 s of pour (seconds of wall time each, warm): Ctrl-C lands while the second one runs,
+    # where members of 0.1 s all end before the signal on an idle machine
+    proc = start_sweep(study, "1.0", tmp_path)
     first = wait_for_first_member(proc, study)
     proc.send_signal(signal.SIGINT)
     out, err = proc.communicate(timeout=60)

@@ -86,6 +86,20 @@ def _ready(a, shape) -> bool:
     return type(a) is np.ndarray and a.shape == shape and a.dtype == _F64 and a.flags.c_contiguous
 
 
+def check_options(convection, tolerance, max_iterations, jacobian_reuse, linear_solver) -> None:
+    """CaseError naming the key for a solver option out of range (the 2D and the 3D solver take the same)."""
+    if convection not in SCHEMES:
+        raise CaseError(f"gas.convection = {convection!r}: allowed are {sorted(SCHEMES)}")
+    if not (isinstance(tolerance, (int, float)) and 0.0 < tolerance < 1.0):
+        raise CaseError(f"gas.tolerance = {tolerance!r}: must be in (0, 1)")
+    if not (isinstance(max_iterations, int) and max_iterations >= 1):
+        raise CaseError(f"gas.max_iterations = {max_iterations!r}: must be an integer >= 1")
+    if not (0.0 <= jacobian_reuse < 1.0):
+        raise CaseError(f"gas.jacobian_reuse = {jacobian_reuse!r}: must be in [0, 1)")
+    if linear_solver in REFUSED_SOLVERS:
+        raise _refused(linear_solver)
+
+
 def _refused(name: str) -> CaseError:
     """The CaseError of a ``linear_solver`` name in ``REFUSED_SOLVERS``."""
     return CaseError(f"gas.linear_solver = {name!r}: {REFUSED_SOLVERS[name]}; allowed are "
@@ -301,16 +315,7 @@ class GasSolver:
         g = np.asarray(gravity, float).ravel()
         if g.size not in (2, 3) or not np.all(np.isfinite(g)) or (g.size == 3 and g[2] != 0.0):
             raise CaseError(f"gravity = {_show(gravity)}: must be (gx, gy) or (gx, gy, 0) [m/s^2] for a 2D gas grid")
-        if convection not in SCHEMES:
-            raise CaseError(f"gas.convection = {convection!r}: allowed are {sorted(SCHEMES)}")
-        if not (isinstance(tolerance, (int, float)) and 0.0 < tolerance < 1.0):
-            raise CaseError(f"gas.tolerance = {tolerance!r}: must be in (0, 1)")
-        if not (isinstance(max_iterations, int) and max_iterations >= 1):
-            raise CaseError(f"gas.max_iterations = {max_iterations!r}: must be an integer >= 1")
-        if not (0.0 <= jacobian_reuse < 1.0):
-            raise CaseError(f"gas.jacobian_reuse = {jacobian_reuse!r}: must be in [0, 1)")
-        if linear_solver in REFUSED_SOLVERS:
-            raise _refused(linear_solver)
+        check_options(convection, tolerance, max_iterations, jacobian_reuse, linear_solver)
         if linear_solver not in LINEAR_SOLVERS:
             raise CaseError(f"gas.linear_solver = {linear_solver!r}: allowed are "
                             + ", ".join(repr(k) for k in LINEAR_SOLVERS))

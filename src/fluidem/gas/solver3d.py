@@ -59,10 +59,10 @@ from .grid import (
 )
 from .solver import (
     COARSEST,
+    check_options,
     KRYLOV_MAX,
     KRYLOV_REDUCTION,
     KRYLOV_RESTART,
-    REFUSED_SOLVERS,
     SCHEMES,
     SLOW_CONVERGENCE,
     GasConvergenceError,
@@ -70,7 +70,6 @@ from .solver import (
     GasSolver,
     GasState,
     StepInfo,
-    _refused,
     _show,
 )
 
@@ -108,16 +107,7 @@ class GasSolver3D(GasSolver):
         g = np.asarray(gravity, float).ravel()
         if g.size != 3 or not np.all(np.isfinite(g)):
             raise CaseError(f"gravity = {_show(gravity)}: must be (gx, gy, gz) [m/s^2] for a 3D gas grid")
-        if convection not in SCHEMES:
-            raise CaseError(f"gas.convection = {convection!r}: allowed are {sorted(SCHEMES)}")
-        if not (isinstance(tolerance, (int, float)) and 0.0 < tolerance < 1.0):
-            raise CaseError(f"gas.tolerance = {tolerance!r}: must be in (0, 1)")
-        if not (isinstance(max_iterations, int) and max_iterations >= 1):
-            raise CaseError(f"gas.max_iterations = {max_iterations!r}: must be an integer >= 1")
-        if not (0.0 <= jacobian_reuse < 1.0):
-            raise CaseError(f"gas.jacobian_reuse = {jacobian_reuse!r}: must be in [0, 1)")
-        if linear_solver in REFUSED_SOLVERS:
-            raise _refused(linear_solver)
+        check_options(convection, tolerance, max_iterations, jacobian_reuse, linear_solver)
         if linear_solver not in LINEAR_SOLVERS_3D:
             raise CaseError(f"gas.linear_solver = {linear_solver!r}: on a 3D grid allowed are "
                             + ", ".join(repr(k) for k in LINEAR_SOLVERS_3D)

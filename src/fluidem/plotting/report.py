@@ -94,6 +94,22 @@ def builtin_differences(run: RunData) -> tuple[list[str], float | None] | None:
     return diffs, (float(end) if isinstance(end, (int, float)) else None)
 
 
+def figure_html(name: str, fig, caption: str) -> str:
+    """A figure of a report page: the PNG embedded (the page stays one file), with its caption (HTML)."""
+    data = base64.b64encode(style.png_bytes(fig, dpi=REPORT_DPI)).decode("ascii")
+    e = html.escape
+    return (f'<figure id="fig-{e(name)}"><img alt="{e(name)}" src="data:image/png;base64,{data}">'
+            f"<figcaption><b>{e(name)}</b>{caption}</figcaption></figure>")
+
+
+def skipped_html(skipped: list[tuple[str, str]]) -> list[str]:
+    """The list of figures a page left out, each with its one-line reason (empty: none)."""
+    if not skipped:
+        return []
+    e = html.escape
+    return ["<p>Skipped:</p><ul>", *(f'<li class="note">{e(name)}: {e(why)}</li>' for name, why in skipped), "</ul>"]
+
+
 def build_report(run: RunData, options: PlotOptions | None = None) -> tuple[str, ReportResult]:
     """The report page as HTML text, and what went into it."""
     options = options or PlotOptions()
@@ -149,18 +165,11 @@ def build_report(run: RunData, options: PlotOptions | None = None) -> tuple[str,
             if fig is None:
                 result.skipped.append((spec.name, why))
                 continue
-            data = base64.b64encode(style.png_bytes(fig, dpi=REPORT_DPI)).decode("ascii")
             result.figures.append(spec.name)
-            parts.append(f'<figure id="fig-{e(spec.name)}"><img alt="{e(spec.name)}" '
-                         f'src="data:image/png;base64,{data}">'
-                         f"<figcaption><b>{e(spec.name)}</b>: {e(spec.description)}</figcaption></figure>")
+            parts.append(figure_html(spec.name, fig, f": {e(spec.description)}"))
     if not result.figures:
         parts.append('<p class="note">No figure applies to this run.</p>')
-    if result.skipped:
-        parts.append("<p>Skipped:</p><ul>")
-        for name, why in result.skipped:
-            parts.append(f'<li class="note">{e(name)}: {e(why)}</li>')
-        parts.append("</ul>")
+    parts.extend(skipped_html(result.skipped))
 
     parts.append("<h2>Case</h2>")
     parts.append(f"<p>The case as resolved by the run (<code>{e(str(run.path / 'case.toml'))}</code>):</p>")

@@ -8,7 +8,6 @@ outside.
 """
 from __future__ import annotations
 
-import base64
 import html
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -17,7 +16,7 @@ from ..errors import CaseError
 from . import style
 from .compare import _fmt
 from .figures.study import render_study
-from .report import CSS, REPORT_DPI, SCRIPT
+from .report import CSS, SCRIPT, figure_html, skipped_html
 from .study import StudyData
 
 STUDY_CSS = ".scroll { overflow-x: auto; } td.failed { color: #a40000; }\n"
@@ -82,18 +81,11 @@ def build_study_report(study: StudyData) -> tuple[str, StudyReportResult]:
             if fig is None:
                 result.skipped.append((name, why))
                 continue
-            data = base64.b64encode(style.png_bytes(fig, dpi=REPORT_DPI)).decode("ascii")
             result.figures.append(name)
-            parts.append(f'<figure id="fig-{e(name)}"><img alt="{e(name)}" src="data:image/png;base64,{data}">'
-                         f"<figcaption><b>{e(name)}</b> against the varied keys (mean over the seeds)"
-                         "</figcaption></figure>")
+            parts.append(figure_html(name, fig, " against the varied keys (mean over the seeds)"))
     if not result.figures:
         parts.append('<p class="note">No figure: no summary scalar differs between completed members.</p>')
-    if result.skipped:
-        parts.append("<p>Skipped:</p><ul>")
-        for name, why in result.skipped:
-            parts.append(f'<li class="note">{e(name)}: {e(why)}</li>')
-        parts.append("</ul>")
+    parts.extend(skipped_html(result.skipped))
     parts.append("<h2>study.toml</h2>")
     parts.append(f"<pre>{e(study.definition_text)}</pre>")
     parts.append(f"<script>{SCRIPT}</script>")

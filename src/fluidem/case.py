@@ -58,7 +58,8 @@ class Species(Strict):
     name: str = Field("particles", description="species name (pairs, wall_pairs and the output refer to it)")
     diameter: float = Field(gt=0.0, description="diameter [m] (the mean if a size_distribution is given)")
     density: float = Field(gt=0.0, description="material density [kg/m^3]")
-    count: int = Field(ge=1, description="number of particles (at least 1; with placement.method = 'file', the "
+    count: int = Field(ge=0, description="number of particles at t = 0 (0 only for a species an inlet feeds; with "
+                                         "placement.method = 'file', the "
                                          "file's rows of this species)")
     size_distribution: SizeDistribution | None = Field(None, description="diameters drawn from a distribution; "
                                                                          "default all equal to diameter")
@@ -170,6 +171,65 @@ class Wall(Strict):
         return self
 
 
+class Inlet(Strict):
+    """An insertion region: particles of one species added at a rate, at random places in a box without overlap
+    (``particles/population.py``); soft spheres."""
+
+    name: str = Field("inlet", description="inlet name (probes and summary columns refer to it)")
+    species: str | None = Field(None, description="the species inserted (its diameter or size distribution and "
+                                                  "density); default the first species")
+    lower: Vec3 = Field(description="lower corner of the insertion box [m]")
+    upper: Vec3 = Field(description="upper corner of the insertion box [m]")
+    rate: float | None = Field(None, gt=0.0, description="particles per second [1/s] (give rate or mass_rate)")
+    mass_rate: float | None = Field(None, gt=0.0, description="mass per second [kg/s] (give rate or mass_rate); "
+                                    "the particles' sizes are drawn first, then as many as carry the mass")
+    start: float = Field(0.0, ge=0.0, description="time of the first insertion [s]")
+    stop: float | None = Field(None, gt=0.0, description="no insertion after this time [s]; default the run's end")
+    total: int | None = Field(None, ge=1, description="insert at most this many particles in all; default no limit")
+    interval: float = Field(0.01, gt=0.0, description="time between insertions [s]: each inserts what the rate "
+                            "gives over the interval (plus what a crowded region could not take before)")
+    velocity: Vec3 = Field((0.0, 0.0, 0.0), description="initial velocity of the inserted particles [m/s]")
+    seed: int = Field(1, description="random seed of the sizes and places")
+
+    @model_validator(mode="after")
+    def _check(self):
+        if (self.rate is None) == (self.mass_rate is None):
+            raise ValueError(f"inlet {self.name!r}: give exactly one of rate [1/s] and mass_rate [kg/s]")
+        for a, b, ax in zip(self.lower, self.upper, "xyz"):
+            if b < a:
+                raise ValueError(f"inlet {self.name!r}: upper {ax} = {b} is below lower {ax} = {a}")
+        if self.stop is not None and self.stop <= self.start:
+            raise ValueError(f"inlet {self.name!r}: stop = {self.stop} must be later than start = {self.start}")
+        return self
+
+
+class Outlet(Strict):
+    """A removal region: particles whose centre lies in a box, or beyond a plane, leave the run."""
+
+    name: str = Field("outlet", description="outlet name (probes and summary columns refer to it)")
+    kind: Literal["box", "plane"] = Field(description="box: remove the centres inside lower–upper; plane: remove "
+                                          "the centres behind the plane (on the side its normal points away from)")
+    lower: Vec3 | None = Field(None, description="box: lower corner [m]")
+    upper: Vec3 | None = Field(None, description="box: upper corner [m]")
+    point: Vec3 | None = Field(None, description="plane: a point of the plane [m]")
+    normal: Vec3 | None = Field(None, description="plane: normal pointing to the side where particles stay")
+
+    @model_validator(mode="after")
+    def _check(self):
+        if self.kind == "box":
+            if self.lower is None or self.upper is None:
+                raise ValueError(f"outlet {self.name!r}: kind = 'box' needs lower and upper")
+            for a, b, ax in zip(self.lower, self.upper, "xyz"):
+                if not b > a:
+                    raise ValueError(f"outlet {self.name!r}: upper {ax} = {b} must exceed lower {ax} = {a}")
+        else:
+            if self.point is None or self.normal is None:
+                raise ValueError(f"outlet {self.name!r}: kind = 'plane' needs point and normal")
+            if math.hypot(*self.normal) == 0:
+                raise ValueError(f"outlet {self.name!r}: normal = {list(self.normal)} is zero")
+        return self
+
+
 class Particles(Strict):
     """The particles: species, contact laws and overrides, and how they are placed at t = 0."""
 
@@ -250,6 +310,9 @@ class Case(Strict):
     gravity: Vec3 | None = Field(None, description="[m/s^2]; default −9.81 along y in 2D, along z in 3D")
     particles: Particles
     walls: list[Wall] = Field(default_factory=list, description="walls of the particles")
+    inlets: list[Inlet] = Field(default_factory=list, description="insertion regions adding particles during the "
+                                "run (soft spheres)")
+    outlets: list[Outlet] = Field(default_factory=list, description="removal regions taking particles out of the run")
     time: Time = Field(description="end time and time step")
     neighbours: Neighbours = Field(default_factory=Neighbours, description="neighbour-list settings")
     output: Output = Field(default_factory=Output, description="what is written and how often")
@@ -279,6 +342,7 @@ class Case(Strict):
         for wp in self.particles.wall_pairs:
             if wp.wall is not None and wp.wall not in names:
                 raise ValueError(f"particles.wall_pairs: wall {wp.wall!r} is not one of {names}")
+        self._check_population()
         if self.gas is None and self.coupling is not None:
             raise ValueError("coupling: [coupling] needs a [gas] section; add one, or remove [coupling] "
                              "for a run without gas")
@@ -295,6 +359,33 @@ class Case(Strict):
                 object.__setattr__(self, "coupling", CouplingSection())
             self._check_gas_covers_particles()
         return self
+
+    def _check_population(self) -> None:
+        """Inlets name existing species; a species with count 0 needs an inlet; names are unique; in 2D an
+        inlet's box holds the plane of the particles' centres."""
+        species = [s.name for s in self.particles.species]
+        fed = set()
+        for kind, items in (("inlets", self.inlets), ("outlets", self.outlets)):
+            names = [x.name for x in items]
+            for j, name in enumerate(names):
+                if name in names[:j]:
+                    raise ValueError(f"{kind}.{j}.name = {name!r}: {kind} names must be unique")
+        for j, inlet in enumerate(self.inlets):
+            name = inlet.species if inlet.species is not None else species[0]
+            if name not in species:
+                raise ValueError(f"inlets.{j}.species = {inlet.species!r} is not one of {species}")
+            fed.add(name)
+        for j, sp in enumerate(self.particles.species):
+            if sp.count == 0 and sp.name not in fed:
+                raise ValueError(f"particles.species.{j}.count = 0: species {sp.name!r} has no particles and no inlet "
+                                 "feeds it; give count >= 1 or an [[inlets]] entry with species = "
+                                 f"{sp.name!r}")
+        if self.inlets and self.particles.contact.instantaneous:
+            raise ValueError(f"inlets: the hard-sphere engine (contact model {self.particles.contact.model!r}) keeps "
+                             "a fixed set of particles; inlets need a soft-sphere contact law")
+        if self.outlets and self.particles.contact.instantaneous:
+            raise ValueError(f"outlets: the hard-sphere engine (contact model {self.particles.contact.model!r}) keeps "
+                             "a fixed set of particles; outlets need a soft-sphere contact law")
 
     def _check_gas_covers_particles(self) -> None:
         """ValueError where the particles' box or placement region reaches outside the gas grid (x-y, lower-left

@@ -140,6 +140,7 @@ class Simulation:
             # the engine's total energy at t = 0 where it books it (hard spheres: Hoomans 1996 eq. 51's balance)
             self.energy0 = self.engine.bookkeeping().get("total_energy_J")
             self.gas = self._gas_coupling(self.engine)
+        self.population = self._population()  # inlets and outlets; None without
         self.checks = RunChecks(case.checks, self.engine, self.gas)  # between chunks, before the observers
         self.observers: dict = {}
         self.progress = Progress(case.output.progress_interval) if progress else None
@@ -180,6 +181,27 @@ class Simulation:
         from .coupling.exchange import GasCoupling
 
         return GasCoupling(self.case, engine)
+
+    def _population(self):
+        """The case's inlets and outlets (``particles.population.Population``); None where it has neither."""
+        if not (self.case.inlets or self.case.outlets):
+            return None
+        from .particles.population import Population
+
+        if not self.engine.changes_population:
+            raise CaseError(f"inlets/outlets: the {type(self.engine).__name__} cannot add or remove particles "
+                            "during a run; use the soft-sphere engine on the CPU (device = 'cpu')")
+        return Population(self.case, self.engine, self.gas.substeps if self.gas is not None else 1)
+
+    def _change_population(self) -> None:
+        """The inlets' and outlets' insertions and removals due now (``run``, between compiled chunks)."""
+        pop = self.population
+        if pop is None or self.steps < pop.next_step(self.dt):
+            return
+        if pop.apply(self.steps, self.dt, self.time):
+            if self.gas is not None:
+                self.gas._set_volumes()
+            self.checks.start()  # the kinetic energy the next check compares with: that of the new particles
 
     def _open_checkpoint(self) -> dict:
         """Build the engine (and gas) from the newest usable checkpoint of ``out_dir``; its scalars.
@@ -309,6 +331,8 @@ class Simulation:
             self.observers["gas_fields"] = GasFieldWriter(self.out_dir, EveryTime(o.snapshot_interval or end / 100))
         probes = [lambda s: P.energies(s.engine), lambda s: s.engine.bookkeeping(), lambda s: P.contacts(s.engine),
                   F.bed_probes]
+        if self.population is not None:  # particle count, each inlet's and outlet's running count and mass
+            probes.append(lambda s: s.population.probes())
         if len(self.case.particles.species) > 1:  # per-species heights, segregation and mixing indices
             probes.append(M.mixing_probes)
         self.observers["probes"] = ProbeWriter(self.out_dir, probes, EveryTime(o.probe_interval or end / 1000))
@@ -370,6 +394,7 @@ class Simulation:
         nxt = {k: o.schedule.next_step(self.steps, self.dt) for k, o in self.observers.items()}
         fired = dict.fromkeys(self.observers, -1)  # the step each observer last wrote at
         if self.steps == 0:
+            self._change_population()  # an inlet starting at t = 0 fills before the first output
             t0 = _time.perf_counter()
             for k, obs in self.observers.items():
                 obs(self)
@@ -384,7 +409,9 @@ class Simulation:
             while self.steps < target:
                 if self._stop_requested:
                     raise KeyboardInterrupt
-                stop = min([target, self.steps + chunk] + list(nxt.values()))
+                self._change_population()
+                events = [self.population.next_step(self.dt)] if self.population is not None else []
+                stop = min([target, self.steps + chunk] + list(nxt.values()) + events)
                 t0 = _time.perf_counter()
                 engine0 = self.gas.engine_seconds if self.gas is not None else 0.0
                 n = stop - self.steps
@@ -576,6 +603,8 @@ class Simulation:
                 out["contact_drag_ratio_max"] = F.largest_force_ratio(self.gas.grid, eng)  # NaN → null below
             if self.out_dir is not None:
                 out.update(F.time_averages(self.out_dir / "probes.csv", self.time))
+        if self.population is not None:
+            out.update(self.population.summary())
         out.update(self._summary_extra)
         return out
 
@@ -625,6 +654,8 @@ class Simulation:
                        output_seconds=self.output_seconds)
         if self.energy0 is not None:
             scalars["energy0"] = self.energy0
+        if self.population is not None:
+            scalars.update(self.population.checkpoint_scalars())
         arrays = self.engine.checkpoint_arrays()
         if self.gas is not None:
             arrays = {**arrays, **self.gas.checkpoint_arrays()}
@@ -654,6 +685,8 @@ class Simulation:
         self.warm_particle_steps = int(scalars.get("warm_particle_steps", 0))
         if "energy0" in scalars:
             self.energy0 = float(scalars["energy0"])
+        if self.population is not None:
+            self.population.restore(scalars)
 
     @classmethod
     def resume(cls, out_dir: str | Path, progress: bool = False, threads: int | None = None,

@@ -27,7 +27,7 @@ def contacts(engine) -> dict[str, float]:
         point, normal = wall_positions(engine)
         gap = np.einsum("nwk,wk->nw", st.position[:, None, :] - point[None, :, :], normal) - st.radius[:, None]
         wall_contacts = int(np.sum(gap < 0))
-        worst = max(worst, float(np.max(-gap / (2 * st.radius[:, None]))))
+        worst = max(worst, float(np.max(-gap / (2 * st.radius[:, None]), initial=0.0)))
     return {"contacts": int(total), "wall_contacts": wall_contacts, "coordination": 2.0 * total / n,
             "max_overlap_rel": float(max(worst, 0.0))}
 
@@ -56,6 +56,8 @@ def surface_packing_fraction(engine, samples_per_diameter: int = 20) -> float:
     lies above the floor between them.
     """
     st = engine.state
+    if st.n == 0:  # every particle gone through an outlet, or none arrived yet
+        return float("nan")
     if engine.walls.box_lower is not None:
         x0, y0 = engine.walls.box_lower[0], engine.walls.box_lower[1]
         x1 = engine.walls.box_upper[0]

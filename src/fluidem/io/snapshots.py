@@ -33,7 +33,7 @@ class ParticleWriter:
         self.extra_fields = extra_fields or {}
         # (key, time) of the file's snapshots: read from the file once, then kept up to date here (reading
         # every snapshot's time back on each write made a run's output cost grow with the square of its length)
-        self._times: list[tuple[str, float]] | None = None
+        self._times: list[tuple[str, float, int]] | None = None
         # particles.xdmf, appended to one grid a snapshot (io/xdmf.py); _layout: the particle count and fields
         # of the grids in it (a snapshot with others has the whole index written again in its layout)
         self._index = XdmfIndex(self.xdmf, "particles")
@@ -60,17 +60,17 @@ class ParticleWriter:
             for name, value in data.items():
                 g[name] = value
             fields = _field_layout(data)  # from the arrays: reading the datasets back cost ~3 ms a snapshot
-        self._times.append((key, float(sim.time)))
-        times, n = self._times, st.n
+        self._times.append((key, float(sim.time), st.n))
+        times = self._times
 
         def all_grids():
-            return [grid_text(self.path.name, k, t, n, fields) for k, t in times]
+            return [grid_text(self.path.name, k, t, n, fields) for k, t, n in times]
 
-        if (n, fields) != self._layout:
+        if fields != self._layout:
             self._index.rewrite(all_grids())
-            self._layout = (n, fields)
-        else:
-            self._index.append(grid_text(self.path.name, key, float(sim.time), n, fields), all_grids)
+            self._layout = fields
+        else:  # each grid with its own particle count (inlets and outlets change it)
+            self._index.append(grid_text(self.path.name, key, float(sim.time), st.n, fields), all_grids)
 
     def finalize(self, sim) -> None:
         """At the end of a run: the index to disk (each snapshot's append is not synced)."""
@@ -86,10 +86,9 @@ class ParticleWriter:
                 if int(grp[k].attrs["step"]) > step:
                     del grp[k]
             times = self._times = _times(grp)
-            n = grp[times[0][0]]["position"].shape[0] if times else 0
             fields = _field_layout(grp[times[-1][0]]) if times else None
         self._layout = None  # the next snapshot writes the index whole
-        write_text_atomic(self.xdmf, xdmf_text(self.path.name, times, n, fields))
+        write_text_atomic(self.xdmf, xdmf_text(self.path.name, times, fields))
 
 
 def _id_order(ids: np.ndarray):
@@ -99,9 +98,9 @@ def _id_order(ids: np.ndarray):
     return np.argsort(ids, kind="stable")
 
 
-def _times(grp) -> list[tuple[str, float]]:
-    """(key, time) of the snapshots in ``grp``, in order."""
-    return [(k, float(grp[k].attrs["time"])) for k in sorted(grp)]
+def _times(grp) -> list[tuple[str, float, int]]:
+    """(key, time, particle count) of the snapshots in ``grp``, in order."""
+    return [(k, float(grp[k].attrs["time"]), int(grp[k]["position"].shape[0])) for k in sorted(grp)]
 
 
 def _field_layout(group) -> dict[str, tuple[str, int, str, int]]:
@@ -140,10 +139,10 @@ def grid_text(h5name: str, key: str, t: float, n: int, fields) -> str:
     )
 
 
-def xdmf_text(h5name: str, times: list[tuple[str, float]], n: int, fields) -> str:
-    """The whole ``particles.xdmf``: one grid of ``n`` particles with ``fields`` (``_field_layout``; None
-    when ``times`` is empty) per (key, time) in ``times``."""
-    return document("particles", [grid_text(h5name, key, t, n, fields) for key, t in times])
+def xdmf_text(h5name: str, times: list[tuple[str, float, int]], fields) -> str:
+    """The whole ``particles.xdmf``: one grid of n particles with ``fields`` (``_field_layout``; None
+    when ``times`` is empty) per (key, time, n) in ``times``."""
+    return document("particles", [grid_text(h5name, key, t, n, fields) for key, t, n in times])
 
 
 def _snapshot_file(path: str | Path) -> Path:
@@ -167,7 +166,8 @@ def snapshot_index(path: str | Path) -> list[tuple[str, float]]:
     readable file and ``KeyError`` when it has no ``/snapshots`` group or a snapshot no time.
     """
     with h5py.File(_snapshot_file(path), "r") as f:
-        return _times(_snapshots_group(f))
+        grp = _snapshots_group(f)
+        return [(k, float(grp[k].attrs["time"])) for k in sorted(grp)]
 
 
 def snapshot_fields(path: str | Path, index: int = 0) -> tuple[str, ...]:

@@ -79,6 +79,25 @@ class ParticleEngine:
         empty where the engine keeps none."""
         return {}
 
+    #: True where the engine can add and remove particles during a run (``replace_particles``)
+    changes_population: ClassVar[bool] = False
+
+    def replace_particles(self, keep: np.ndarray, added: ParticleState | None) -> None:
+        """Keep the particles where ``keep`` (bool, (N,)) is true, in their order, and append ``added`` after them
+        (inlets and outlets, ``particles/population.py``); between steps only."""
+        raise CaseError(f"{type(self).__name__} cannot add or remove particles during a run (inlets, outlets)")
+
+    def _replaced_state(self, keep: np.ndarray, added: ParticleState | None) -> ParticleState:
+        """The state of ``replace_particles``: the kept rows, then ``added``'s."""
+        st = self.state
+        out = {}
+        for k, a in st.arrays().items():
+            a = a[keep]
+            if added is not None:
+                a = np.concatenate([a, getattr(added, k)])
+            out[k] = np.ascontiguousarray(a)
+        return ParticleState(**out)
+
     def summary_entries(self, wall_time: float, particle_time: float, energy0: float | None,
                         coupled: bool) -> dict:
         """Engine-specific figures of ``summary.json``, given the run's wall time and the part of it spent in

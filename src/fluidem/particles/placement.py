@@ -16,24 +16,28 @@ from ..errors import CaseError
 from ._placement_kernels import random_fill
 
 
+def species_diameters(sp, count: int, rng) -> np.ndarray:
+    """``count`` diameters of species ``sp`` [m]: its ``diameter``, or draws from its ``size_distribution``
+    (normal and lognormal clipped to min/max, by default 0.1 and 10 times the diameter)."""
+    dist = sp.size_distribution
+    if dist is None:
+        return np.full(count, sp.diameter)
+    if dist.kind == "uniform":
+        return rng.uniform(dist.min, dist.max, count)
+    if dist.kind == "normal":
+        d = rng.normal(sp.diameter, dist.std, count)
+    else:
+        d = sp.diameter * np.exp(rng.normal(-0.5 * dist.std**2, dist.std, count))
+    lo = dist.min if dist.min is not None else 0.1 * sp.diameter
+    hi = dist.max if dist.max is not None else 10.0 * sp.diameter
+    return np.clip(d, lo, hi)
+
+
 def draw_diameters(case, rng) -> tuple[np.ndarray, np.ndarray]:
     """(diameter (N,), species index (N,)) for all species of the case."""
     diam, spec = [], []
     for k, sp in enumerate(case.particles.species):
-        dist = sp.size_distribution
-        if dist is None:
-            d = np.full(sp.count, sp.diameter)
-        elif dist.kind == "uniform":
-            d = rng.uniform(dist.min, dist.max, sp.count)
-        else:
-            if dist.kind == "normal":
-                d = rng.normal(sp.diameter, dist.std, sp.count)
-            else:
-                d = sp.diameter * np.exp(rng.normal(-0.5 * dist.std**2, dist.std, sp.count))
-            lo = dist.min if dist.min is not None else 0.1 * sp.diameter
-            hi = dist.max if dist.max is not None else 10.0 * sp.diameter
-            d = np.clip(d, lo, hi)
-        diam.append(d)
+        diam.append(species_diameters(sp, sp.count, rng))
         spec.append(np.full(sp.count, k, dtype=np.int64))
     return np.concatenate(diam), np.concatenate(spec)
 
@@ -64,6 +68,8 @@ def place(case, walls) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     rng = np.random.default_rng(pl.seed)
     diam, spec = draw_diameters(case, rng)
     n = diam.size
+    if n == 0:  # every species waits for its inlet
+        return np.zeros((0, 3)), np.zeros((0, 3)), diam, spec
     lo, hi = region(case, walls)
     z0 = 0.5 * (lo[2] + hi[2]) if dim2 else 0.0
     if pl.method == "random":

@@ -14,7 +14,8 @@ import numpy as np
 from ..errors import CaseError
 from ..state import ParticleState
 from . import _softsphere_kernels as K
-from ._neighbours_kernels import build_pairs, contacts_first
+from ._neighbours_kernels import build_pairs, carry_history, contacts_first
+from ._population_kernels import drop_pairs
 from .contact.base import N_SLOTS
 from .engine import ParticleEngine
 
@@ -37,7 +38,7 @@ class SoftSphereEngine(ParticleEngine):
         self.pp, self.pw, self.contact_times = self._contact_tables()
         # an adhesive law keeps each formed contact's pull-off distance in a fourth history column
         self.wall_hist = np.zeros((st.n, len(self.walls.planes), 4 if self.wall_adhesive else 3))
-        dmax = 2.0 * st.radius.max() if st.n else 0.0
+        dmax = 2.0 * self.largest_radius  # of the particles there and of those inlets may insert
         self.skin = case.neighbours.skin if case.neighbours.skin is not None else 0.25 * dmax
         self._check_pull_off()
         self.dt = self._time_step()
@@ -71,6 +72,8 @@ class SoftSphereEngine(ParticleEngine):
         m_min = np.array([st.mass[st.species == k].min() if np.any(st.species == k) else np.inf for k in range(ns)])
         r_min = np.array([st.radius[st.species == k].min() if np.any(st.species == k) else np.inf for k in range(ns)])
         r_max = np.array([st.radius[st.species == k].max() if np.any(st.species == k) else 0.0 for k in range(ns)])
+        self._widen_for_inlets(m_min, r_min, r_max)
+        self.largest_radius = float(r_max.max()) if ns else 0.0
         self.pair_adhesive = self.wall_adhesive = False
         self.pull_offs = []  # (largest pull-off distance [m], what) of each adhesive law
         for a in range(ns):
@@ -99,6 +102,23 @@ class SoftSphereEngine(ParticleEngine):
                     times.append((law.contact_time(m_min[a], r_min[a], v, sp[a], plane.source),
                                   f"species {sp[a].name}–wall {plane.name}"))
         return pp, pw, times
+
+    def _widen_for_inlets(self, m_min, r_min, r_max) -> None:
+        """The smallest and largest radius (and smallest mass) of each species, widened in place to the sizes an
+        inlet may insert (``SizeDistribution`` bounds; normal and lognormal clipped at 0.1 and 10 diameters), so
+        that the step and the pull-off check hold for particles that arrive later."""
+        sp = self.case.particles.species
+        names = [s.name for s in sp]
+        for inlet in self.case.inlets:
+            k = names.index(inlet.species) if inlet.species is not None else 0
+            d, dist = sp[k].diameter, sp[k].size_distribution
+            lo = hi = d
+            if dist is not None:
+                lo = dist.min if dist.min is not None else 0.1 * d
+                hi = dist.max if dist.max is not None else 10.0 * d
+            r_min[k] = min(r_min[k], 0.5 * lo)
+            r_max[k] = max(r_max[k], 0.5 * hi)
+            m_min[k] = min(m_min[k], sp[k].density * math.pi / 6.0 * lo**3)
 
     def _check_pull_off(self) -> None:
         """An adhesive contact lasts until its pull-off distance, so the Verlet list must keep pairs (and the
@@ -201,6 +221,42 @@ class SoftSphereEngine(ParticleEngine):
             self.last_reorder = int(last_reorder)
             for f in self.reorder_listeners:
                 f(order)
+
+    # ------------------------------------------------------------ inlets and outlets
+    changes_population = True
+
+    def replace_particles(self, keep: np.ndarray, added: ParticleState | None) -> None:
+        """Keep the particles where ``keep`` is true and append ``added`` (``particles/population.py``), between
+        steps: the contact list is built anew with the histories of the pairs that stay (``drop_pairs``, then
+        ``carry_history`` as at a rebuild); the stored forces of the particles that stay are kept for the next
+        half kick as the last step left them (a removed partner's contact acts on them for that half step), those
+        of the new particles are their weight (they arrive without contacts; a coupling adds their gas force at
+        its next gas step)."""
+        st = self.state
+        keep = np.asarray(keep, dtype=np.bool_)
+        kept = np.flatnonzero(keep)
+        new_index = np.full(st.n, -1, dtype=np.int64)
+        new_index[kept] = np.arange(kept.size)
+        n_add = 0 if added is None else added.n
+        old = drop_pairs(self.row_start, self.partner, self.hist, new_index, kept.size + n_add)
+
+        def grown(a):
+            return np.ascontiguousarray(np.concatenate([a[keep], np.zeros((n_add,) + a.shape[1:])]))
+
+        self.ext_force, self.ext_damping, self.wall_hist = grown(self.ext_force), grown(self.ext_damping), \
+            grown(self.wall_hist)
+        if added is not None:
+            added.force[...] = added.mass[:, None] * self.gravity
+            added.torque[...] = 0.0
+        self.state = st = self._replaced_state(keep, added)
+        self._derive_inverses()
+        self.row_start, self.partner, self.slab_start, self.slab_members = build_pairs(
+            st.position, st.radius, self.skin, self.dim2)
+        self.hist = carry_history(*old, self.row_start, self.partner)
+        contacts_first(st.position, st.radius, self.row_start, self.partner, self.hist)
+        self.ref_pos = st.position.copy()
+        self.rebuilds += 1
+        self._reach_walls()
 
     # ------------------------------------------------------------ checkpoint
     def checkpoint_arrays(self) -> dict[str, np.ndarray]:

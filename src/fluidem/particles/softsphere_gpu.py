@@ -47,6 +47,8 @@ def gpu_refusals(case) -> list[str]:
                    "on the CPU only)")
     if case.gas is not None:
         out.append("a [gas] section (the gas-particle coupling runs on the CPU only)")
+    if case.inlets or case.outlets:
+        out.append("[[inlets]] / [[outlets]] (particles added and removed during a run: the CPU engine only)")
     found = set()
 
     def visit(node, path):  # every contact law of the case: the default, the wall law, the override tables

@@ -127,7 +127,7 @@ def test_until_must_be_a_positive_number(tmp_path, capsys, value):
 # ---------------------------------------------------------------- 2. a species without particles
 def test_species_count_zero(tmp_path, capsys):
     refused(["pour", "--until", "0.01", "--set", "particles.species.0.count=0"], capsys, tmp_path,
-            ["particles.species.0.count = 0", "greater than or equal to 1"])
+            ["particles.species.0.count = 0", "no inlet feeds it", "count >= 1"])
 
 
 # ---------------------------------------------------------------- 3. unreadable case files

@@ -227,3 +227,19 @@ def test_gpu_engine_refuses_inlets():
     from fluidem.particles.softsphere_gpu import gpu_refusals
 
     assert any("[[inlets]]" in r for r in gpu_refusals(feed_case(inlets=[INLET])))
+
+
+def test_coupled_run_maps_the_particles_that_arrive(tmp_path):
+    """With a gas, particles inserted during the run enter the voidage map of the next gas step."""
+    case = feed_case(inlets=[{**INLET, "stop": 0.02}], end=0.03).model_dump()
+    case["gas"] = {"dt": 1e-4, "grid": {"cells": [4, 10], "size": [0.04, 0.1], "depth": D},
+                   "boundaries": {"bottom": {"kind": "inflow", "superficial": 0.05}, "top": {"kind": "pressure_outlet"},
+                                  "left": {"kind": "wall"}, "right": {"kind": "wall"}}}
+    case["coupling"] = {"voidage": {"method": "centroid"}}
+    sim = Simulation(validate_case(case), out_dir=tmp_path / "r")
+    s = sim.run()
+    assert s["n_particles"] == s["inlet_feed_count"] == 40
+    sim.advance(sim.gas.substeps)  # one more gas step maps the particles there now
+    gd = sim.gas.grid
+    solids = float(((1.0 - sim.gas.last_map.voidage) * gd.dx * gd.dy * D).sum())
+    assert solids == pytest.approx(float((4 / 3 * math.pi * sim.state.radius**3).sum()), rel=1e-9)

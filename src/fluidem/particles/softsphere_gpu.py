@@ -45,8 +45,6 @@ def gpu_refusals(case) -> list[str]:
     if case.particles.contact.instantaneous:
         out.append(f"particles.contact.model = {case.particles.contact.model!r} (event-driven hard spheres run "
                    "on the CPU only)")
-    if case.gas is not None:
-        out.append("a [gas] section (the gas-particle coupling runs on the CPU only)")
     found = set()
 
     def visit(node, path):  # every contact law of the case: the default, the wall law, the override tables

@@ -40,9 +40,10 @@ def test_hard_spheres_on_the_gpu_are_refused_by_name():
         engine_for(case)
 
 
-def test_a_gas_coupled_case_on_the_gpu_is_refused_by_name():
-    with pytest.raises(CaseError, match=r"device = 'gpu'.*\[gas\]"):
-        choose_device(load_case("tsuji-jet", {"device": "gpu"}))
+def test_a_gas_coupled_case_runs_on_the_gpu():
+    """The particle side of the coupling runs on the host with the particles fetched once a gas step
+    (tests/gpu: ``test_coupled_run_matches_cpu``): a [gas] section is no refusal."""
+    assert gpu_refusals(load_case("tsuji-jet", {"device": "gpu"})) == []
 
 
 def test_auto_falls_back_to_the_cpu():

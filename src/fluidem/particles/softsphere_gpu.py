@@ -45,8 +45,6 @@ def gpu_refusals(case) -> list[str]:
     if case.particles.contact.instantaneous:
         out.append(f"particles.contact.model = {case.particles.contact.model!r} (event-driven hard spheres run "
                    "on the CPU only)")
-    if case.gas is not None:
-        out.append("a [gas] section (the gas-particle coupling runs on the CPU only)")
     if case.inlets or case.outlets:
         out.append("[[inlets]] / [[outlets]] (particles added and removed during a run: the CPU engine only)")
     found = set()

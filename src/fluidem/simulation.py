@@ -177,6 +177,10 @@ class Simulation:
         """The two-way coupling of a case with a gas (gas steps of DT, DEM sub-steps within); None without."""
         if self.case.gas is None:
             return None
+        if self.case.gas.grid.dimensions == 3:
+            from .coupling.exchange3d import GasCoupling3D
+
+            return GasCoupling3D(self.case, engine)
         from .coupling.exchange import GasCoupling
 
         return GasCoupling(self.case, engine)

@@ -62,6 +62,17 @@ def test_trilinear_weights_reproduce_linear_fields():
     P3.sample3d(edge, u, v, w, eps, dx, dy, dz, True, False, False, True, out[:2])
     assert out[0, 3] == pytest.approx(0.5 * (eps[0, 1, 1] + eps[-1, 1, 1]), rel=1e-14)
     assert out[1, 3] == pytest.approx(0.75 * eps[0, 1, 1] + 0.25 * eps[-1, 1, 1], rel=1e-14)
+    # the public function gives the kernel's numbers
+    from fluidem.coupling.interpolation import sample_gas3d
+    from fluidem.gas.grid import StaggeredGrid
+    from fluidem.gas.solver import GasState
+
+    grid = StaggeredGrid(cells=(nx, ny, nz), size=(nx * dx, ny * dy, nz * dz))
+    state = GasState(p=np.zeros(eps.shape), rho=np.ones(eps.shape), u=u, v=v, w=w, voidage=eps)
+    got = sample_gas3d(grid, state, pos, fold=False)
+    P3.sample3d(pos, u, v, w, eps, dx, dy, dz, False, False, False, False, out)
+    for k, name in enumerate(("u", "v", "w", "voidage")):
+        np.testing.assert_array_equal(got[name], out[:, k])
 
 
 def test_face_volumes_take_in_the_boundary_half_cells():

@@ -173,3 +173,17 @@ def test_methods_refused_on_the_wrong_grid(grid):
     g2 = StaggeredGrid(cells=(4, 4), size=(0.02, 0.02), depth=D)
     with pytest.raises(ValueError, match="needs a 3D grid"):
         V.VoidageMapping(method="volume").map(g2, pos, D)
+
+
+def test_sauter_inverse_of_the_cells(grid):
+    """1/D̄ = Σ V_p/d_p / Σ V_p of the centres in each cell (DEM book 2012 eq. 10); empty cells take the bed's."""
+    pos, d = random_spheres(grid, seed=5)
+    inv = V.sauter_inverse(grid, pos, d)
+    idx = tuple(np.clip((pos[:, a] / grid.spacing[a]).astype(int), 0, grid.cells[a] - 1) for a in range(3))
+    vol = d**3
+    num, den = np.zeros(grid.shape), np.zeros(grid.shape)
+    np.add.at(num, idx, vol / d)
+    np.add.at(den, idx, vol)
+    bed = np.sum(vol / d) / np.sum(vol)
+    expected = np.where(den > 0, num / np.where(den > 0, den, 1.0), bed)
+    np.testing.assert_allclose(inv, expected, rtol=1e-13)

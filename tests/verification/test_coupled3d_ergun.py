@@ -12,7 +12,8 @@ eq. 43 reduces to
 
 U superficial. The expected voidage is computed here from the lattice, independently of the mapping code:
 ε = 1 − 64 V_p / dx³. The 2 % is the 2D test's requirement; plug flow through uniform cells is an exact
-discrete solution, so what is left is the gas solver's tolerance.
+discrete solution, so what is left is the gas solver's tolerance (measured: 3e-12 at 0.2 m/s, 2e-14 at 3 m/s,
+both mappings alike).
 """
 import math
 

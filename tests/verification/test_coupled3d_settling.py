@@ -46,7 +46,7 @@ def test_lone_sphere_reaches_the_terminal_velocity_of_its_drag_law(drag, density
     sim.advance(int(round(end / sim.dt)))
     vt = terminal_velocity(drag, float(sim.gas.state.rho.mean()), pgf)
     v = -sim.state.velocity[0, axis]
-    # required 0.5 %, as in 2D: the gas the sphere drags along moves it by ~1e-4 of v_t at this solids fraction
+    # required 0.5 %, as in 2D; measured 1.2e-4 to 2.6e-4 below v_t (the gas the sphere drags along)
     assert abs(v - vt) < 0.005 * vt, (v, vt)
     across = np.delete(sim.state.velocity[0], axis)
     assert np.all(np.abs(across) < 1e-3 * vt)

@@ -23,3 +23,9 @@ def test_resumed_coupled_3d_run_matches_the_uninterrupted_one(stopped_and_resume
     g = case.gas.grid
     assert fields["voidage"].shape[1:] == tuple(g.cells)  # (T, nx, ny, nz)
     assert "uz" in fields and "solids_w" in fields
+    # the run's figures read the gas maps averaged along z (x–y maps of the pseudo-2D view)
+    from fluidem.plotting.run import RunData
+
+    maps = RunData(tmp_path / "run").gas["voidage"]
+    assert maps.shape[1:] == (g.cells[0], g.cells[1])
+    np.testing.assert_allclose(maps, fields["voidage"].mean(axis=3), rtol=1e-15)

@@ -15,6 +15,9 @@ coupled     The built-in ``tsuji-jet-background`` case (Sun 2007: 2400 soft sphe
             DEM, the neighbour lists' share estimated as rebuilds × one rebuild timed after the
             run: the sub-steps run in one compiled call), and the wall time that 20 s at this pace
             would take (the case's length; the target is 3 minutes on 2 cores).
+coupled 3D  The built-in ``bubbling-3d`` case (9240 spheres of 1.2 mm, 15 × 40 × 3 gas cells, exact
+            sphere-in-cell voidage) the same way, for min(``coupled_until``, 0.02) simulated seconds (its
+            DEM step is 7 times shorter: a window as long as the 2D row's would take minutes).
 hard spheres The built-in ``hoomans-orifice`` case (Hoomans 1996 Table 2: 2400 hard spheres, 15 × 25
             gas cells, DT = 1e-4 s) including the gas: its 0.5 s start-up at the u_mf background is run
             untimed (``hard_warmup``), then ``hard_until`` seconds of the 45 m/s jet are timed:
@@ -173,6 +176,8 @@ def time_engine(eng, steps: int, target_seconds: float = 5.0) -> tuple[int, floa
     eng.advance(steps)
     return steps, time.perf_counter() - t0
 
+
+COUPLED_3D_UNTIL = 0.02  # [s] the longest window of the 3D coupled row
 
 # where a coupled gas step's wall time goes: (name, owner, bound method) of one simulation's objects
 COUPLED_COMPONENTS = (("DEM", "engine", "advance"), ("gas solve", "solver", "advance"), ("map", "gas", "_map"),
@@ -463,8 +468,9 @@ def run_bench(sizes=None, threads="1,2", steps: int = 0, as_json: str | None = N
     if coupled:
         print(f"\n{'coupled (gas included)':28s} {'N':>6s} {'threads':>7s} {'sim s':>6s} {'wall s':>7s} "
               f"{'particle-steps/s':>17s} {'ms/gas step':>11s} {'20 s takes':>10s}")
-        for t in threads:
-            r = time_coupled("tsuji-jet-background", until=coupled_until, threads=t)
+        for name, t in [(n, t) for n in ("tsuji-jet-background", "bubbling-3d") for t in threads]:
+            r = time_coupled(name, until=coupled_until if name != "bubbling-3d" else min(coupled_until, COUPLED_3D_UNTIL),
+                             threads=t)
             rows.append(r)
             print(f"{r['problem']:28s} {r['n_particles']:6d} {r['threads']:7d} {r['sim_seconds']:6.2f} "
                   f"{r['wall_s']:7.2f} {r['particle_steps_per_s']:17.3e} {r['ms_per_gas_step']:11.3f} "

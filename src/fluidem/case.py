@@ -17,6 +17,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from .checks import ChecksSection
 from .coupling.schema import CouplingSection
+from .coupling.voidage import check_method
 from .errors import CaseError
 from .gas.schema import GasSection
 from .particles.contact import contact_models
@@ -346,18 +347,18 @@ class Case(Strict):
         if self.gas is None and self.coupling is not None:
             raise ValueError("coupling: [coupling] needs a [gas] section; add one, or remove [coupling] "
                              "for a run without gas")
-        if self.gas is not None:
-            if self.gas.grid.dimensions == 3:
-                raise ValueError(f"gas.grid.cells = {list(self.gas.grid.cells)}: a 3D gas grid is not coupled to "
-                                 "particles yet; a case with particles takes a 2D gas grid (cells = [nx, ny] and a "
-                                 "depth). The 3D gas solver runs on its own: fluidem.gas.GasSolver(StaggeredGrid("
-                                 "cells=(nx, ny, nz), ...), ...)")
+        if self.gas is not None and self.gas.grid.dimensions == 3:
+            if self.coupling is None:
+                object.__setattr__(self, "coupling", CouplingSection())
+            self._check_gas3d(gravity)
+        elif self.gas is not None:
             if self.gravity[2] != 0.0:
                 raise ValueError(f"{gravity} = {list(self.gravity)}: the 2D gas grid (x-y) needs gravity in the x-y "
                                  "plane (z = 0); set gravity = [0.0, -9.81, 0.0]")
             if self.coupling is None:
                 object.__setattr__(self, "coupling", CouplingSection())
             self._check_gas_covers_particles()
+            check_method(self.coupling.voidage.method, 2)
         return self
 
     def _check_population(self) -> None:
@@ -386,6 +387,49 @@ class Case(Strict):
         if self.outlets and self.particles.contact.instantaneous:
             raise ValueError(f"outlets: the hard-sphere engine (contact model {self.particles.contact.model!r}) keeps "
                              "a fixed set of particles; outlets need a soft-sphere contact law")
+
+    def _check_gas3d(self, gravity: str) -> None:
+        """ValueError where a case with a 3D gas grid cannot be coupled: 2D particles, gravity off the grid
+        axes, an exchange or voidage method the 3D coupling does not offer, particles outside the grid."""
+        cells = list(self.gas.grid.cells)
+        if self.particles.dimensions != 3:
+            raise ValueError(f"gas.grid.cells = {cells} (a 3D gas grid) and particles.dimensions = 2: a 3D gas grid "
+                             "takes 3D particles (particles.dimensions = 3); 2D particles take a 2D grid "
+                             "(cells = [nx, ny] and a depth)")
+        if sum(1 for g in self.gravity if g != 0.0) > 1:
+            raise ValueError(f"{gravity} = {list(self.gravity)}: with a 3D gas grid gravity must lie along one grid "
+                             "axis (one non-zero component, e.g. [0.0, 0.0, -9.81])")
+        if self.coupling.momentum_exchange != "particle":
+            raise ValueError(f"coupling.momentum_exchange = {self.coupling.momentum_exchange!r}: a 3D gas grid takes "
+                             "'particle' only (each particle's drag, paired with the gas)")
+        check_method(self.coupling.voidage.method, 3)
+        if self.coupling.voidage.to_3d:
+            raise ValueError("coupling.voidage.to_3d = true: Hoomans 1996 eq. 49 converts a 2D area voidage; a 3D gas "
+                             "grid maps sphere volumes (set to_3d = false)")
+        size = self.gas.grid.size
+        tol = 1e-6 * max(size)
+        fix = "make the gas grid cover the particles (or shrink the box)"
+
+        def outside(lo, hi) -> str | None:
+            for d, ax in enumerate("xyz"):
+                if lo[d] < -tol or hi[d] > size[d] + tol:
+                    return f"{ax} from {lo[d]:g} to {hi[d]:g} m is not within the gas grid's 0 to {size[d]:g} m"
+            return None
+
+        for i, w in enumerate(self.walls):
+            if w.kind == "box":
+                what = outside(w.lower, w.upper)
+                if what:
+                    raise ValueError(f"walls.{i} ({w.name!r}) lower = {list(w.lower)}, upper = {list(w.upper)} and "
+                                     f"gas.grid.size = {list(size)}: {what} (the grid's corner is at the origin); "
+                                     f"particles would leave the gas domain: {fix}")
+        pl = self.particles.placement
+        if pl.region_lower is not None and pl.region_upper is not None:
+            what = outside(pl.region_lower, pl.region_upper)
+            if what:
+                raise ValueError(f"particles.placement.region_lower = {list(pl.region_lower)}, "
+                                 f"particles.placement.region_upper = {list(pl.region_upper)} and gas.grid.size = "
+                                 f"{list(size)}: {what}; particles would start outside the gas domain: {fix}")
 
     def _check_gas_covers_particles(self) -> None:
         """ValueError where the particles' box or placement region reaches outside the gas grid (x-y, lower-left

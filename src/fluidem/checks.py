@@ -197,10 +197,11 @@ class RunChecks:
         height = 0.0
         if coupling is not None:
             gd = coupling.grid
-            px, py = coupling._periodic
-            self.lower = np.array([-math.inf if px else gd.x_faces[0], -math.inf if py else gd.y_faces[0], -math.inf])
-            self.upper = np.array([math.inf if px else gd.x_faces[-1], math.inf if py else gd.y_faces[-1], math.inf])
-            height = abs(float(np.array([gd.x_faces[-1], gd.y_faces[-1], 0.0]) @ self.up))
+            periodic = tuple(coupling._periodic) + (True,) * (3 - len(coupling._periodic))  # 2D: z unbounded
+            faces = (gd.x_faces, gd.y_faces, gd.z_faces if gd.dimensions == 3 else None)
+            self.lower = np.array([-math.inf if periodic[a] else faces[a][0] for a in range(3)])
+            self.upper = np.array([math.inf if periodic[a] else faces[a][-1] for a in range(3)])
+            height = abs(float(np.array([f[-1] if f is not None else 0.0 for f in faces]) @ self.up))
         walls = engine.walls
         if walls.box_lower is not None:
             height = max(height, abs(float((walls.box_upper - walls.box_lower) @ self.up)))
@@ -374,8 +375,9 @@ class RunChecks:
         """Raise if a gas field is not finite; keep the largest gas speed (``_gas_speed``) [m/s]."""
         gs = self.coupling.state
         u, v = float(np.abs(gs.u).max()), float(np.abs(gs.v).max())
-        self._gas_speed = max(u, v)
-        for name, value in (("p", float(np.sum(gs.p))), ("u", u), ("v", v)):  # NaN and inf carry to the sum, max
+        w = float(np.abs(gs.w).max()) if gs.w is not None else 0.0
+        self._gas_speed = max(u, v, w)
+        for name, value in (("p", float(np.sum(gs.p))), ("u", u), ("v", v), ("w", w)):  # NaN and inf carry to the sum, max
             if not math.isfinite(value):
                 a = getattr(gs, name)
                 cell = np.unravel_index(int(np.argmax(~np.isfinite(a))), a.shape)

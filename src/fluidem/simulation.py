@@ -178,6 +178,10 @@ class Simulation:
         """The two-way coupling of a case with a gas (gas steps of DT, DEM sub-steps within); None without."""
         if self.case.gas is None:
             return None
+        if self.case.gas.grid.dimensions == 3:
+            from .coupling.exchange3d import GasCoupling3D
+
+            return GasCoupling3D(self.case, engine)
         from .coupling.exchange import GasCoupling
 
         return GasCoupling(self.case, engine)
@@ -597,9 +601,13 @@ class Simulation:
             out.update(gas_dt_s=self.gas.gas_dt, gas_steps=self.gas.gas_steps, dem_substeps=self.gas.substeps,
                        gas_courant_max=self.gas.courant_max)
             out["multicontact_ratio"] = F.multicontact_ratio(F.contact_numbers(eng))
-            out["pressure_drop_bed_Pa"] = F.pressure_drop(self.gas.grid, self.gas.state.p,
-                                                          self.gas.grid.y_centres[-1] + 0.5 * self.gas.grid.dy)
-            if eng.contact_forces:  # Sun 2007 Figs 7/12: cell contact force over gas force, end state
+            gd = self.gas.grid
+            if gd.dimensions == 3:  # along gravity, the pressure averaged over each layer of cells
+                axis = F.up_axis(gd, eng.gravity)
+                out["pressure_drop_bed_Pa"] = F.pressure_drop(gd, self.gas.state.p, gd.size[axis], axis)
+            else:
+                out["pressure_drop_bed_Pa"] = F.pressure_drop(gd, self.gas.state.p, gd.y_centres[-1] + 0.5 * gd.dy)
+            if eng.contact_forces and gd.dimensions == 2:  # Sun 2007 Figs 7/12: cell contact force over gas force
                 out["contact_drag_ratio_max"] = F.largest_force_ratio(self.gas.grid, eng)  # NaN → null below
             if self.out_dir is not None:
                 out.update(F.time_averages(self.out_dir / "probes.csv", self.time))

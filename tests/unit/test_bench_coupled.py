@@ -79,3 +79,17 @@ def test_bench_refuses_a_hard_sphere_window_that_is_not_positive(capsys):
 
     assert main(["bench", "--sizes", "", "--no-gas", "--no-coupled", "--hard-until", "-1"]) == 2
     assert "--hard-until = -1.0: must be a positive number" in capsys.readouterr().err
+
+
+def test_coupled_3d_timing_row():
+    """The 3D coupled row (``bubbling-3d``): the gas steps the window holds, its parts within the wall time,
+    the "particle" exchange's parts all timed."""
+    case = load_case("bubbling-3d")
+    until = 0.002
+    r = time_coupled("bubbling-3d", until=until, warmup=0.001, threads=1)
+    assert r["gas_steps"] == round(until / case.gas.dt) == 20
+    assert r["n_particles"] == 9240
+    parts = r["ms_per_gas_step_parts"]
+    assert parts["other"] >= 0.0 and parts["beta"] == 0.0
+    assert min(parts["DEM"], parts["gas solve"], parts["map"], parts["deposit"], parts["forces"]) > 0.0
+    assert math.isclose(r["particle_steps_per_s"], 9240 * r["gas_steps"] * r["substeps"] / r["wall_s"], rel_tol=1e-12)

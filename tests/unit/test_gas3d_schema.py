@@ -1,4 +1,4 @@
-"""The [gas] section with a 3D grid: three cells entries build the 3D solver; a case with particles refuses it."""
+"""The [gas] section with a 3D grid: three cells entries build the 3D solver; a case with 2D particles refuses it."""
 import pytest
 
 from fluidem.case import load_case
@@ -51,12 +51,12 @@ def test_2d_sections_refuse_front_and_back():
         GasSection.model_validate(data)
 
 
-def test_a_case_with_particles_refuses_a_3d_gas_grid():
+def test_2d_particles_refuse_a_3d_gas_grid():
     case = load_case("tsuji-jet")
     data = case.model_dump(mode="json", exclude_none=True)
     data["gas"] = GAS_3D
     data["gravity"] = [0.0, -9.81, 0.0]
     from fluidem.case import validate_case
 
-    with pytest.raises(CaseError, match="a 3D gas grid is not coupled to particles yet"):
+    with pytest.raises(CaseError, match="a 3D gas grid takes 3D particles"):
         validate_case(data)

@@ -80,16 +80,24 @@ def gas_force(engine) -> np.ndarray:
     return engine.ext_force.copy()
 
 
-def pressure_at_heights(grid, p: np.ndarray, heights) -> np.ndarray:
+def up_axis(grid, gravity) -> int:
+    """The grid axis along which heights are measured: that of gravity on a 3D grid (y without gravity), y in 2D."""
+    g = np.asarray(gravity, float)[:grid.dimensions]
+    return int(np.argmax(np.abs(g))) if grid.dimensions == 3 and np.any(g != 0.0) else 1
+
+
+def pressure_at_heights(grid, p: np.ndarray, heights, axis: int = 1) -> np.ndarray:
     """Width-averaged pressure [Pa] at the given heights, linear in y between cell-centre rows and
     extrapolated linearly below the first and above the last row.
 
     The extrapolation to the inflow is the coupled model's own inlet pressure: the half cell below
     the first centre belongs to the first interior face's momentum control volume
     (``coupling.boundary_faces = "fold"``, ``coupling.exchange.face_volumes``), across which the
-    pressure falls with that face's gradient."""
-    yc = grid.y_centres
-    prof = np.asarray(p, float).mean(axis=0)
+    pressure falls with that face's gradient. On a 3D grid the heights are along ``axis`` (``up_axis``) and
+    the pressure is averaged over each layer of cells across it."""
+    yc = (grid.x_centres, grid.y_centres, grid.z_centres)[axis] if grid.dimensions == 3 else grid.y_centres
+    pa = np.asarray(p, float)
+    prof = pa.mean(axis=tuple(a for a in range(pa.ndim) if a != axis)) if grid.dimensions == 3 else pa.mean(axis=0)
     h = np.atleast_1d(np.asarray(heights, float))
     out = np.interp(h, yc, prof)
     # np.interp clamps; extrapolate linearly below the first and above the last centre
@@ -100,9 +108,9 @@ def pressure_at_heights(grid, p: np.ndarray, heights) -> np.ndarray:
     return out
 
 
-def pressure_drop(grid, p: np.ndarray, height: float = PRESSURE_PROBE_HEIGHT) -> float:
-    """p(inlet) − p(height) [Pa], width-averaged (Sun 2007 Fig 3)."""
-    a, b = pressure_at_heights(grid, p, [0.0, height])
+def pressure_drop(grid, p: np.ndarray, height: float = PRESSURE_PROBE_HEIGHT, axis: int = 1) -> float:
+    """p(inlet) − p(height) [Pa], width-averaged (Sun 2007 Fig 3); on a 3D grid heights along ``axis``."""
+    a, b = pressure_at_heights(grid, p, [0.0, height], axis)
     return float(a - b)
 
 
@@ -251,7 +259,14 @@ def bed_probes(sim) -> dict[str, float]:
            "multicontact_ratio": multicontact_ratio(nc),
            "particles_in_contact": int(np.count_nonzero(nc >= 1))}
     gas = getattr(sim, "gas", None)
-    if gas is not None:
+    if gas is not None and gas.grid.dimensions == 3:  # pressure drops along gravity; the maps below are 2D
+        grid = gas.grid
+        axis = up_axis(grid, eng.gravity)
+        top = grid.size[axis]
+        if PRESSURE_PROBE_HEIGHT < top:
+            out["pressure_drop_20cm_Pa"] = pressure_drop(grid, gas.state.p, PRESSURE_PROBE_HEIGHT, axis)
+        out["pressure_drop_bed_Pa"] = pressure_drop(grid, gas.state.p, top, axis)
+    elif gas is not None:
         grid = gas.grid
         top = grid.y_centres[-1] + 0.5 * grid.dy
         if PRESSURE_PROBE_HEIGHT < top:

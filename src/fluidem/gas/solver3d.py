@@ -28,8 +28,9 @@ Where later physics goes (no rewrite needed):
   is given as ``voidage=`` (the mass, momentum and pressure-matrix terms then all see the blocked volume),
   with φ_fluid = 0 cells flagged as walls.
 
-What is not here yet: the coupling to particles (a case with a 3D gas grid and particles is refused), the
-3D voidage map and the trilinear interpolation of the gas to the particles.
+The coupling to particles is ``coupling/exchange3d.py`` (the 3D voidage map, the trilinear interpolation
+and the paired exchange); it hands the solver β and u_s on the faces and the pressure term's voidage
+(``pressure_voidage``).
 """
 from __future__ import annotations
 
@@ -425,6 +426,20 @@ class GasSolver3D(GasSolver):
             if a.dtype != np.float64 or not a.flags.c_contiguous:
                 raise CaseError(f"gas state.{key}: must be a C-contiguous float64 array (as initial_state makes it)")
 
+    def _pressure_voidage(self, value) -> tuple:
+        """The step input ``pressure_voidage``: three face arrays in (0, 1]; CaseError otherwise."""
+        if not (isinstance(value, (tuple, list)) and len(value) == 3):
+            raise CaseError("gas pressure_voidage: give three face arrays (x-faces, y-faces, z-faces) on a 3D grid")
+        out = []
+        for a, e in enumerate(value):
+            e = np.asarray(e, float)
+            if e.shape != self.grid.face_shape(a):
+                raise CaseError(f"gas pressure_voidage[{a}]: shape {e.shape}, expected {self.grid.face_shape(a)}")
+            if not np.all((e > 0.0) & (e <= 1.0)):
+                raise CaseError(f"gas pressure_voidage[{a}]: every face value must lie in (0, 1]")
+            out.append(e)
+        return tuple(out)
+
     # ------------------------------------------------------------ time step
     def advance(self, state: GasState, dt: float, t: float = 0.0, *, voidage=None, beta=None, solids_u=None,
                 solids_v=None, solids_w=None, source_u=None, source_v=None, source_w=None,
@@ -436,11 +451,13 @@ class GasSolver3D(GasSolver):
         solids_u, solids_v, solids_w : None, float, centre or face arrays: solids velocity in β(u − u_s) [m/s]
         source_u, source_v, source_w : None, float, centre or face arrays: explicit momentum source [N/m^3]
             (the place of a body force of immersed boundaries)
+        pressure_voidage : None or (x-face, y-face, z-face) arrays in (0, 1]: the voidage ε_p,f of the pressure
+            term −ε_p,f ∂p/∂x on each face (None: ε_f, the face value of ``voidage``), as in 2D
 
         Returns a ``StepInfo``; raises ``CaseError`` for bad input and ``GasConvergenceError`` when the step
         fails (the state is then left as it was at t)."""
         if pressure_voidage is not None:
-            raise CaseError("gas pressure_voidage: not offered on a 3D grid yet (it comes with the 3D coupling)")
+            pressure_voidage = self._pressure_voidage(pressure_voidage)
         if not (isinstance(dt, (int, float, np.floating)) and math.isfinite(dt) and dt > 0.0):
             raise CaseError(f"gas time step dt = {_show(dt)}: must be > 0 [s]")
         dt = float(dt)
@@ -460,6 +477,9 @@ class GasSolver3D(GasSolver):
         fpar[lay.FP_DT] = dt
         K3.begin_step(state.p, state.rho, state.u, state.v, state.w, state.voidage, eps_new, self.W, self.Q, self.C,
                       self.F, self.K, self.S, self.T, self.flags, self.RULES, fpar, ipar)
+        if pressure_voidage is not None:  # replaces the ε_f that begin_step gave the pressure term
+            for a, e in enumerate(pressure_voidage):
+                self.F[(lay.F_EP, a) + tuple(slice(0, n) for n in e.shape)] = e
         it = 0
         prev = math.inf
         fresh = False  # the factors (SuperLU) are of this iteration's matrix
@@ -523,11 +543,29 @@ class GasSolver3D(GasSolver):
 
     # ------------------------------------------------------------ diagnostics
     def checkpoint_arrays(self) -> dict[str, np.ndarray]:
-        """None yet on a 3D grid (3D runs are not coupled or checkpointed yet): the empty dict."""
-        return {}
+        """What the next step starts from besides the state, for checkpoints: the linear solver in use (the
+        multigrid gives way to SuperLU for good when it fails) and the matrix whose SuperLU factors the next
+        step may reuse (``jacobian_reuse``). The multigrid makes its hierarchy anew every iteration. With
+        these restored (``restore_factors``, which factorises the same matrix again) a resumed run goes on
+        bit for bit."""
+        have = self._lu is not None
+        return {"matrix": self.MAT[1] if have else np.zeros(0),
+                "flags": np.array([int(have), int(self._solver == "superlu")], np.int64)}
 
     def restore_factors(self, arrays: dict[str, np.ndarray]) -> None:
-        """Nothing to take back on a 3D grid (``checkpoint_arrays``)."""
+        """Take back ``checkpoint_arrays``: the solver in use and the SuperLU factors of the saved matrix."""
+        have, superlu = (int(x) for x in arrays["flags"])
+        if superlu:
+            self._solver = "superlu"
+        self._lu = None
+        if have:
+            m = np.asarray(arrays["matrix"], float)
+            if m.shape != self.MAT[1].shape:
+                raise CaseError(f"checkpoint gas solver matrix: shape {m.shape}, this case's is {self.MAT[1].shape} "
+                                "(a checkpoint of another grid or boundaries)")
+            self.MAT[1] = m
+            n = self.R.size
+            self._lu = spla.splu(sp.csc_matrix((m.copy(), self._indices, self._indptr), shape=(n, n)))
 
     @property
     def factorisations(self) -> int:

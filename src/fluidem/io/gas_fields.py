@@ -59,11 +59,11 @@ FORMAT, VERSION = "fluidem-gas", 1
 # Fields every snapshot holds, then the ones written when the coupling exposes them.
 FIELDS = ("voidage", "solids_fraction", "p", "rho", "ux", "uy", "superficial_ux", "superficial_uy")
 FIELDS_Z = ("uz", "superficial_uz")  # the fields of a 3D grid besides FIELDS
-OPTIONAL_FIELDS = ("solids_u", "solids_v", "beta")
+OPTIONAL_FIELDS = ("solids_u", "solids_v", "solids_w", "beta")
 ALL_FIELDS = FIELDS + FIELDS_Z + OPTIONAL_FIELDS
 UNITS = {"voidage": "-", "solids_fraction": "-", "p": "Pa", "rho": "kg/m^3", "ux": "m/s", "uy": "m/s",
          "superficial_ux": "m/s", "superficial_uy": "m/s", "uz": "m/s", "superficial_uz": "m/s",
-         "solids_u": "m/s", "solids_v": "m/s",
+         "solids_u": "m/s", "solids_v": "m/s", "solids_w": "m/s",
          "beta": "kg/(m^3 s)"}
 
 
@@ -92,7 +92,7 @@ def cell_fields(state, last_map=None, last_beta=None) -> dict[str, np.ndarray]:
         out["uz"] = 0.5 * (w[:, :, :-1] + w[:, :, 1:])
         out["superficial_uz"] = eps * out["uz"]
     if last_map is not None:
-        for name in ("solids_u", "solids_v"):
+        for name in ("solids_u", "solids_v", "solids_w"):
             value = getattr(last_map, name, None)
             if value is not None:
                 out[name] = np.asarray(value, float)

@@ -277,6 +277,8 @@ class RunData:
             return None, f"{GAS_FILE} cannot be read: {_reason(err)}"
         if len(data["time"]) == 0:
             return None, f"{GAS_FILE} holds no complete snapshots"
+        if "z" in data:  # a 3D grid: the x–y maps show each field averaged along z (a pseudo-2D bed's depth)
+            data = {k: (v.mean(axis=3) if isinstance(v, np.ndarray) and v.ndim == 4 else v) for k, v in data.items()}
         return data, None
 
     def lacks_gas(self, *fields: str) -> str | None:
@@ -291,7 +293,8 @@ class RunData:
 
     @property
     def gas(self) -> dict[str, np.ndarray]:
-        """``gas.h5`` as ``fluidem.io.read_gas_fields`` returns it (fields (T, nx, ny)); raises ``Unavailable``."""
+        """``gas.h5`` as ``fluidem.io.read_gas_fields`` returns it (fields (T, nx, ny); a 3D grid's averaged along
+        z); raises ``Unavailable``."""
         data, why = self._gas
         if data is None:
             raise Unavailable(why)

@@ -47,6 +47,9 @@ def gpu_refusals(case) -> list[str]:
                    "on the CPU only)")
     if case.gas is not None:
         out.append("a [gas] section (the gas-particle coupling runs on the CPU only)")
+    for i, w in enumerate(case.walls):
+        if getattr(w, "periodic", None):
+            out.append(f"walls.{i}.periodic = {list(w.periodic)} (periodic sides run on the CPU only)")
     found = set()
 
     def visit(node, path):  # every contact law of the case: the default, the wall law, the override tables

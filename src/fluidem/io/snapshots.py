@@ -1,7 +1,8 @@
 """Particle snapshots in one HDF5 file, indexed by an XDMF file that ParaView opens.
 
 Layout of ``particles.h5``: ``/snapshots/<6-digit index>/{position, velocity, omega,
-diameter, species, id}`` plus the writer's extra fields (e.g. ``contacts`` N_c,
+diameter, species, id}`` (and ``image``, (N, 3) int, in a box with periodic sides: the crossings of each
+side, so that position + image · L is the unwrapped position) plus the writer's extra fields (e.g. ``contacts`` N_c,
 ``contact_force``, ``gas_force``), with attributes ``time`` [s] and ``step``. ``particles.xdmf`` is a temporal
 collection of Polyvertex grids pointing at those datasets; each snapshot appends its grid
 in one write (``io/xdmf.py``), so it is valid between snapshots, and it is written whole again on
@@ -55,6 +56,8 @@ class ParticleWriter:
             data = {"position": st.position[by_id], "velocity": st.velocity[by_id], "omega": st.omega[by_id],
                     "diameter": 2.0 * st.radius[by_id], "species": st.species[by_id].astype(np.int32),
                     "id": st.ids[by_id]}
+            if getattr(sim.engine, "periodic", False):  # periodic sides: the counts that unwrap the positions
+                data["image"] = st.image[by_id]
             for name, fn in self.extra_fields.items():
                 data[name] = np.asarray(fn(sim))[by_id]
             for name, value in data.items():

@@ -169,3 +169,16 @@ def test_placement_in_a_periodic_box_has_no_overlap_across_the_sides(contact_law
         r = eng.minimum_image(eng.state.position[:, None, :] - eng.state.position[None, :, :])
         dist = np.linalg.norm(r, axis=2) + np.eye(300) * 1.0
         assert dist.min() >= D * (1 - 1e-12)
+
+
+def test_contact_probe_counts_a_contact_across_the_side(base):
+    """Two spheres overlapping by 10 µm across the x side: one contact, by nearest image."""
+    from fluidem.analysis.fluidised import contact_numbers
+    from fluidem.analysis.probes import contacts
+
+    L = 10 * D
+    eng = SoftSphereEngine(validate_case(base([[0.5 * D - 5e-6, 5 * D, 5 * D], [L - 0.5 * D + 5e-6, 5 * D, 5 * D]])))
+    got = contacts(eng)
+    assert got["contacts"] == 1
+    assert got["max_overlap_rel"] == pytest.approx(10e-6 / D, rel=1e-6)
+    assert contact_numbers(eng).tolist() == [1, 1]

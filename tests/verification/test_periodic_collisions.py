@@ -80,7 +80,7 @@ def test_oblique_collision_across_the_side_equals_the_interior_one(tmp_path, dim
 @pytest.mark.parametrize("dimensions", [2, 3])
 def test_momentum_conserved_through_many_collisions_in_a_fully_periodic_box(tmp_path, dimensions):
     """400 (2D) or 500 (3D) spheres with random velocities, no gravity, no walls: the total momentum after
-    thousands of steps and collisions equals the initial one to round-off, 1e-12 of Σ m |v|."""
+    0.03 s of collisions equals the initial one to round-off, 1e-12 of Σ m |v|."""
     rng = np.random.default_rng(4)
     n = 400 if dimensions == 2 else 500
     per_axis = 20 if dimensions == 2 else 8
@@ -104,13 +104,13 @@ def test_momentum_conserved_through_many_collisions_in_a_fully_periodic_box(tmp_
     scale = float(np.sum(m[:, 0] * np.linalg.norm(eng.state.velocity, axis=1)))
     ke0 = 0.5 * np.sum(m * eng.state.velocity**2)
     crossings = 0
-    for _ in range(30):
-        eng.advance(200)
+    for _ in range(30):  # 0.03 s: a sphere at the mean speed runs a quarter (2D) to half (3D) the box
+        eng.advance(int(1e-3 / eng.dt))
         crossings = int(np.abs(eng.state.image).sum())
     p1 = np.sum(m * eng.state.velocity, axis=0)
     ke1 = 0.5 * np.sum(m * eng.state.velocity**2)
     assert ke1 < 0.8 * ke0, "too few collisions (restitution 0.9 dissipates energy at each)"
-    assert crossings > n // 10, "too few crossings of the sides"
+    assert crossings > 20, "too few crossings of the sides"
     assert np.all(np.abs(p1 - p0) < 1e-12 * scale), (p1 - p0) / scale
 
 

@@ -182,3 +182,22 @@ def test_contact_probe_counts_a_contact_across_the_side(base):
     assert got["contacts"] == 1
     assert got["max_overlap_rel"] == pytest.approx(10e-6 / D, rel=1e-6)
     assert contact_numbers(eng).tolist() == [1, 1]
+
+
+def test_image_counts_follow_the_particles_through_renumbering(tmp_path):
+    """Particles renumbered in cell order every few steps (neighbours.reorder_interval) carry their image
+    counts: by id, position + image · L is x0 + v t for a lattice drifting as a whole (no contacts)."""
+    L = 10 * D
+    idx = np.arange(27)
+    x0 = np.column_stack([idx % 3, idx // 3 % 3, idx // 9]) * 3.0 * D + 0.5 * D
+    v = np.array([1.3, -0.7, 0.4])
+    data = periodic_case_dict(tmp_path / "p.csv", x0, np.tile(v, (27, 1)), upper=(L, L, L), periodic=["x", "y", "z"])
+    data["neighbours"] = {"reorder_interval": 5}
+    eng = SoftSphereEngine(validate_case(data))
+    for _ in range(20):
+        eng.advance(53)
+    st = eng.state
+    assert eng.reorders > 0 and not np.array_equal(st.ids, idx)
+    assert np.abs(st.image).sum() >= 9  # a layer has crossed a side
+    unwrapped = st.position + st.image * eng.period
+    assert np.allclose(unwrapped, x0[st.ids] + v * eng.steps * eng.dt, rtol=0.0, atol=1e-12 * L)

@@ -139,6 +139,10 @@ def test_checkpoint_restart_of_a_periodic_run_is_bit_for_bit(tmp_path, stopped_a
 
     snap = read_snapshot(tmp_path / "run", -1)
     assert "image" in snap and snap["image"].shape == (120, 3)
+    assert snap["period"].tolist() == [6 * D, 6 * D, 0.0]
+    by_id = np.argsort(a.ids)
+    assert np.array_equal(snap["position"] + snap["image"] * snap["period"],
+                          (a.position + a.image * whole.engine.period)[by_id])
 
 
 def test_state_restored_into_a_new_engine_continues_bit_for_bit(tmp_path):

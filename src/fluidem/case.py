@@ -151,6 +151,11 @@ class Wall(Strict):
     lower: Vec3 | None = Field(None, description="box lower corner [m]")
     upper: Vec3 | None = Field(None, description="box upper corner [m]")
     open_top: bool = Field(False, description="box without its upper wall along gravity")
+    periodic: list[Literal["x", "y", "z"]] = Field(
+        default_factory=list, description="box only: the axes whose two sides are joined instead of being walls; a "
+        "particle leaving through one side re-enters through the other and particles interact across them by nearest "
+        "image (soft-sphere engine on the CPU). Not z in 2D; with [gas], the gas sides on that axis must be "
+        "periodic too")
     motion: Motion | None = Field(None, description="prescribed motion; default at rest")
     contact: WallContact | None = Field(None, description="this wall's overrides of the particle–wall contact")
     youngs_modulus: float | None = Field(None, gt=0.0, description="E [Pa] of the wall for Hertz–Mindlin")
@@ -163,9 +168,16 @@ class Wall(Strict):
                 raise ValueError(f"plane wall {self.name!r} needs point and normal")
             if math.hypot(*self.normal) == 0:
                 raise ValueError(f"plane wall {self.name!r} has a zero normal")
+            if self.periodic:
+                raise ValueError(f"plane wall {self.name!r}: periodic = {self.periodic} needs kind = 'box' (a box's "
+                                 "two sides on an axis are joined; a plane has no opposite side)")
         else:
             if self.lower is None or self.upper is None:
                 raise ValueError(f"box wall {self.name!r} needs lower and upper")
+            if len(set(self.periodic)) != len(self.periodic):
+                raise ValueError(f"box wall {self.name!r}: periodic = {self.periodic} names an axis twice")
+            if self.periodic and self.motion is not None:
+                raise ValueError(f"box wall {self.name!r}: periodic = {self.periodic} needs a box at rest (no motion)")
             for a, b, ax in zip(self.lower, self.upper, "xyz"):
                 if not b > a:
                     raise ValueError(f"box wall {self.name!r}: upper {ax} = {b} must exceed lower {ax} = {a}")
@@ -340,6 +352,7 @@ class Case(Strict):
             if name in names[:j]:
                 raise ValueError(f"walls.{j}.name = {name!r}: wall names must be unique "
                                  f"(walls.{names.index(name)}.name is {name!r} too)")
+        self._check_periodic()
         for wp in self.particles.wall_pairs:
             if wp.wall is not None and wp.wall not in names:
                 raise ValueError(f"particles.wall_pairs: wall {wp.wall!r} is not one of {names}")
@@ -430,6 +443,49 @@ class Case(Strict):
                 raise ValueError(f"particles.placement.region_lower = {list(pl.region_lower)}, "
                                  f"particles.placement.region_upper = {list(pl.region_upper)} and gas.grid.size = "
                                  f"{list(size)}: {what}; particles would start outside the gas domain: {fix}")
+
+    def _check_periodic(self) -> None:
+        """ValueError where a box's ``periodic`` axes do not fit the case: z in 2D, an open top on a periodic
+        axis, more than one box wall with a periodic one, or (with [gas]) gas sides on a periodic axis that
+        are not periodic, or a box that does not span the gas grid along it."""
+        boxes = [(i, w) for i, w in enumerate(self.walls) if w.kind == "box"]
+        per = [(i, w) for i, w in boxes if w.periodic]
+        if not per:
+            return
+        i, w = per[0]
+        key = f"walls.{i}.periodic"
+        if len(boxes) > 1:
+            others = ", ".join(f"walls.{k} ({b.name!r})" for k, b in boxes if k != i)
+            raise ValueError(f"{key} = {w.periodic}: a box with periodic sides must be the case's only box wall "
+                             f"(the particles' domain), but {others} is a box too")
+        if self.particles.dimensions == 2 and "z" in w.periodic:
+            raise ValueError(f"{key} = {w.periodic}: particles.dimensions = 2 has no z motion, so z cannot be "
+                             "periodic; allowed: x, y")
+        if w.open_top:
+            up = "xyz"[max(range(3), key=lambda d: abs(self.gravity[d]))]
+            if up in w.periodic:
+                raise ValueError(f"{key} = {w.periodic} and walls.{i}.open_top = true: the open side is on the "
+                                 f"periodic axis {up}; drop one of the two")
+        if self.gas is not None:
+            sides = {"x": ("left", "right"), "y": ("bottom", "top"), "z": ("front", "back")}
+            size = self.gas.grid.size
+            for ax in w.periodic:
+                d = "xyz".index(ax)
+                if d >= self.gas.grid.dimensions:  # z over a 2D grid: the gas is uniform across its depth
+                    continue
+                for side in sides[ax]:
+                    bc = self.gas.boundaries.get(side)
+                    kind = getattr(bc, "kind", None)
+                    if kind != "periodic":
+                        raise ValueError(f"{key} = {w.periodic} and gas.boundaries.{side} = {kind!r}: particles "
+                                         f"periodic along {ax} need the gas periodic there too; set "
+                                         f"gas.boundaries.{side} (and its opposite side) to 'periodic', or drop "
+                                         f"{ax!r} from {key}")
+                tol = 1e-6 * size[d]
+                if abs(w.lower[d]) > tol or abs(w.upper[d] - size[d]) > tol:
+                    raise ValueError(f"{key} = {w.periodic}: walls.{i} spans {ax} from {w.lower[d]:g} to "
+                                     f"{w.upper[d]:g} m, but gas.grid.size = {list(size)} spans 0 to {size[d]:g} m; "
+                                     "along a periodic axis the two must be the same")
 
     def _check_gas_covers_particles(self) -> None:
         """ValueError where the particles' box or placement region reaches outside the gas grid (x-y, lower-left

@@ -16,6 +16,8 @@ class ParticleState:
     ids : (N,) int64 each particle's number at creation (0 … N−1). A soft-sphere engine may renumber its
         particles in cell order for speed (``neighbours.reorder_interval``); ``ids`` follows them, and
         output files list the particles by it.
+    image : (N, 3) int64 how many times each particle has crossed each periodic side of its box, + for
+        the upper side (0 where no side is periodic): its unwrapped position is position + image · L.
     """
 
     position: np.ndarray
@@ -28,10 +30,13 @@ class ParticleState:
     inertia: np.ndarray
     species: np.ndarray
     ids: np.ndarray | None = None
+    image: np.ndarray | None = None
 
     def __post_init__(self):
         if self.ids is None:
             self.ids = np.arange(self.position.shape[0], dtype=np.int64)
+        if self.image is None:
+            self.image = np.zeros((self.position.shape[0], 3), dtype=np.int64)
 
     @classmethod
     def create(cls, position, velocity, diameter, species, densities) -> "ParticleState":

@@ -243,3 +243,17 @@ def test_coupled_run_maps_the_particles_that_arrive(tmp_path):
     gd = sim.gas.grid
     solids = float(((1.0 - sim.gas.last_map.voidage) * gd.dx * gd.dy * D).sum())
     assert solids == pytest.approx(float((4 / 3 * math.pi * sim.state.radius**3).sum()), rel=1e-9)
+
+
+def test_inlet_beside_a_periodic_side_is_refused():
+    walls = [{"name": "box", "kind": "box", "lower": [0, 0, 0], "upper": [0.04, 0.1, D], "periodic": ["x"]}]
+    with pytest.raises(CaseError, match=r"inlets.0 \('feed'\).*periodic sides"):
+        Simulation(feed_case(count=5, inlets=[{**INLET, "lower": [0.0, 0.07, 0.0]}], walls=walls))
+
+
+def test_inlet_in_a_periodic_box_fills_without_overlap(tmp_path):
+    walls = [{"name": "box", "kind": "box", "lower": [0, 0, 0], "upper": [0.04, 0.1, D], "periodic": ["x"]}]
+    case = feed_case(count=20, inlets=[{**INLET, "stop": 0.03}], walls=walls, end=0.15)
+    sim = Simulation(case, out_dir=tmp_path / "r")
+    s = sim.run()
+    assert s["n_particles"] == 20 + 60 and s["max_overlap_rel"] < 0.1

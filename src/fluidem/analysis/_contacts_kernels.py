@@ -2,6 +2,7 @@
 import numpy as np
 from numba import njit
 
+from ..particles._neighbours_kernels import nearest_image
 from ..particles._softsphere_kernels import wall_contact, walls_now
 
 
@@ -18,6 +19,31 @@ def contact_counts(pos, radius, row_start, partner):
             r2 = 0.0
             for d in range(3):
                 r2 += (pos[i, d] - pos[j, d]) ** 2
+            cut = radius[i] + radius[j]
+            if r2 < cut * cut:
+                per[i] += 1
+                per[j] += 1
+                total += 1
+                ov = (cut - np.sqrt(r2)) / (2.0 * min(radius[i], radius[j]))
+                if ov > worst:
+                    worst = ov
+    return per, total, worst
+
+
+@njit(cache=True, error_model="numpy")
+def contact_counts_periodic(pos, radius, row_start, partner, period):
+    """``contact_counts`` in a box with periodic sides: offsets by nearest image (``period`` (3,) the box
+    length along each periodic axis, 0 elsewhere; ``_neighbours_kernels.nearest_image``)."""
+    n = pos.shape[0]
+    per = np.zeros(n, dtype=np.int64)
+    total = 0
+    worst = 0.0
+    for i in range(n):
+        for p in range(row_start[i], row_start[i + 1]):
+            j = partner[p]
+            r2 = 0.0
+            for d in range(3):
+                r2 += nearest_image(pos[i, d] - pos[j, d], period[d]) ** 2
             cut = radius[i] + radius[j]
             if r2 < cut * cut:
                 per[i] += 1

@@ -1,7 +1,9 @@
 """Particle snapshots in one HDF5 file, indexed by an XDMF file that ParaView opens.
 
 Layout of ``particles.h5``: ``/snapshots/<6-digit index>/{position, velocity, omega,
-diameter, species, id}`` plus the writer's extra fields (e.g. ``contacts`` N_c,
+diameter, species, id}`` (and ``image``, (N, 3) int, in a box with periodic sides: the crossings of each
+side, with the attribute ``period``, the box length L along each periodic axis: position + image · L is the
+unwrapped position) plus the writer's extra fields (e.g. ``contacts`` N_c,
 ``contact_force``, ``gas_force``), with attributes ``time`` [s] and ``step``. ``particles.xdmf`` is a temporal
 collection of Polyvertex grids pointing at those datasets; each snapshot appends its grid
 in one write (``io/xdmf.py``), so it is valid between snapshots, and it is written whole again on
@@ -55,6 +57,9 @@ class ParticleWriter:
             data = {"position": st.position[by_id], "velocity": st.velocity[by_id], "omega": st.omega[by_id],
                     "diameter": 2.0 * st.radius[by_id], "species": st.species[by_id].astype(np.int32),
                     "id": st.ids[by_id]}
+            if getattr(sim.engine, "periodic", False):  # periodic sides: the counts that unwrap the positions
+                data["image"] = st.image[by_id]
+                g.attrs["period"] = sim.engine.period  # (3,) [m] box length along each periodic axis, else 0
             for name, fn in self.extra_fields.items():
                 data[name] = np.asarray(fn(sim))[by_id]
             for name, value in data.items():
@@ -181,13 +186,16 @@ def snapshot_fields(path: str | Path, index: int = 0) -> tuple[str, ...]:
 def read_snapshot(path: str | Path, index: int = -1) -> dict:
     """Snapshot ``index`` (negative counts from the end) of a ``particles.h5``: its datasets as arrays by
     name (``position`` (N, 3) [m], ``velocity`` (N, 3) [m/s], ``diameter`` (N,) [m], ``species``, ``id``
-    and the writer's extra fields) plus ``time`` [s]. ``path`` is a run directory or the file.
+    and the writer's extra fields) plus ``time`` [s] (and ``period`` (3,) [m] in a box with periodic sides, with
+    the dataset ``image``). ``path`` is a run directory or the file.
     Raises as ``snapshot_index`` does, and ``IndexError`` for an index the file does not have."""
     with h5py.File(_snapshot_file(path), "r") as f:
         grp = _snapshots_group(f)
         g = grp[sorted(grp)[index]]
         out = {k: np.asarray(g[k]) for k in g}
         out["time"] = float(g.attrs["time"])
+        if "period" in g.attrs:  # a box with periodic sides: position + image · period unwraps the positions
+            out["period"] = np.asarray(g.attrs["period"])
     return out
 
 

@@ -542,3 +542,217 @@ def carry_history(old_start, old_partner, old_hist, new_start, new_partner):
                 for e in range(3, old_hist.shape[1]):
                     hist[p, e] = old_hist[q, e]
     return hist
+
+
+# ---------------------------------------------------------------- periodic sides
+# A box side made periodic (``walls.periodic``) joins the box's two planes on that axis: a particle leaving
+# through one re-enters through the other, and two particles interact through their nearest images
+# (minimum image convention, Allen & Tildesley 1987 §1.5.3, eq. 1.9: r_ij ← r_ij − L round(r_ij / L)).
+# ``period`` (3,) holds the box length L_d [m] of each periodic axis and 0 elsewhere, ``box_lo`` (3,) the
+# box's lower corner. Positions are kept in [lo_d, lo_d + L_d] (``_softsphere_kernels.wrap_positions``), so
+# |x_i − x_j| ≤ L_d and one correction by ±L_d gives the nearest image. The kernels above, for boxes without
+# periodic sides, are left as they are; those below serve periodic boxes only.
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def nearest_image(r, length):
+    """The component r = x_i − x_j [m] of the nearest image along an axis of period ``length`` (0: not
+    periodic, r unchanged): r − L if r > L/2, r + L if r < −L/2 (Allen & Tildesley 1987 eq. 1.9 for
+    |r| ≤ L)."""
+    if r > 0.5 * length:
+        return r - length
+    if r < -0.5 * length:
+        return r + length
+    return r
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _owns(si, i, sj, j, wrap):
+    """True if particle i (slab si) owns the pair with j (slab sj): the lower key (slab << 32 | index), as
+    ``build_pairs`` orders them, except across the periodic seam of the slab axis (``wrap``: slabs 0 and
+    S − 1 are neighbours), where the particle of slab S − 1 owns it, so that slab s's pairs still touch
+    only slabs s and s + 1 (mod S)."""
+    if wrap and (si - sj > 1 or sj - si > 1):
+        return si > sj
+    return ((si << 32) | i) < ((sj << 32) | j)
+
+
+@njit(cache=True, error_model="numpy")
+def periodic_layout(pos, radius, skin, dim2, period, box_lo, max_slabs):
+    """Cells and slabs of a box with periodic sides: the grid of ``_grid`` over the particles' bounds,
+    except that a periodic axis spans the box [lo, lo + L) exactly (cells at least 2 R_max + skin wide,
+    so the nearest image of a neighbour lies in a neighbouring cell, across the seam too). Slabs along the
+    longest axis, an even number of them (at least 3) where that axis is periodic, so that the parities
+    alternate round the seam.
+
+    Returns (lo (3,), inv (3,), ncell (3,), axis, nslab, width, wrap)."""
+    n = pos.shape[0]
+    lo, hi, rmax = _bounds(pos, radius)
+    for d in range(3):
+        if period[d] > 0.0:
+            lo[d] = box_lo[d]
+            hi[d] = box_lo[d] + period[d]
+    inv, ncell = _grid(lo, hi, rmax, skin, dim2, n)
+    axis = 0
+    best = -1.0
+    for d in range(2 if dim2 else 3):
+        if hi[d] - lo[d] > best:
+            best = hi[d] - lo[d]
+            axis = d
+    nslab = max(1, min(max_slabs, int(best / (2.0 * rmax + skin)))) if n > 0 else 1
+    if period[axis] > 0.0 and nslab >= 3 and nslab % 2 == 1:
+        nslab -= 1
+    width = best / nslab if best > 0 else 1.0
+    wrap = period[axis] > 0.0 and nslab >= 3
+    return lo, inv, ncell, axis, nslab, width, wrap
+
+
+@njit(cache=True, error_model="numpy")
+def _periodic_row(i, pos, radius, skin, period, ncell, cell_of, cstart, cmembers, slab, wrap, out, count_only):
+    """The partners j of particle i that i owns (``_owns``) with |r_ij| < a_i + a_j + skin by nearest image,
+    written to ``out`` unless ``count_only``; returns their number. The 3 × 3 × 3 stencil of i's cell wraps
+    round a periodic axis (an axis of fewer than three cells is searched whole, each cell once)."""
+    c = cell_of[i]
+    nz = ncell[2]
+    ny = ncell[1]
+    cc = (c // (ny * nz), (c // nz) % ny, c % nz)
+    k_lo = np.empty(3, dtype=np.int64)
+    k_hi = np.empty(3, dtype=np.int64)
+    for d in range(3):
+        nd = ncell[d]
+        if period[d] > 0.0 and nd < 3:
+            k_lo[d] = 0
+            k_hi[d] = nd - 1
+        elif period[d] > 0.0:
+            k_lo[d] = cc[d] - 1
+            k_hi[d] = cc[d] + 1
+        else:
+            k_lo[d] = max(cc[d] - 1, 0)
+            k_hi[d] = min(cc[d] + 1, nd - 1)
+    xi = pos[i, 0]
+    yi = pos[i, 1]
+    zi = pos[i, 2]
+    ai = radius[i]
+    si = slab[i]
+    w = 0
+    for kx_ in range(k_lo[0], k_hi[0] + 1):
+        kx = kx_ % ncell[0]
+        for ky_ in range(k_lo[1], k_hi[1] + 1):
+            ky = ky_ % ny
+            for kz_ in range(k_lo[2], k_hi[2] + 1):
+                cell = (kx * ny + ky) * nz + kz_ % nz
+                for m in range(cstart[cell], cstart[cell + 1]):
+                    j = cmembers[m]
+                    if j == i or not _owns(si, i, slab[j], j, wrap):
+                        continue
+                    rx = nearest_image(xi - pos[j, 0], period[0])
+                    ry = nearest_image(yi - pos[j, 1], period[1])
+                    rz = nearest_image(zi - pos[j, 2], period[2])
+                    cut = ai + radius[j] + skin
+                    if rx * rx + ry * ry + rz * rz < cut * cut:
+                        if not count_only:
+                            out[w] = j
+                        w += 1
+    return w
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def build_pairs_periodic(pos, radius, skin, dim2, period, box_lo, slabs=0):
+    """``build_pairs`` for a box with periodic sides: the half list (CSR by owner, rows ascending) of all
+    pairs closer than a_i + a_j + skin between nearest images (``nearest_image``), and the slabs
+    (``periodic_layout``). A pair across the seam of a periodic slab axis belongs to its particle in the
+    last slab (``_owns``), so the pair loops' two parities (even slabs, then odd ones) stay free of races.
+    Needs L_d ≥ 2 (2 R_max + skin) on each periodic axis (checked by the engine), so that a pair has one
+    nearest image. Positions within [lo_d, lo_d + L_d] on the periodic axes."""
+    n = pos.shape[0]
+    lo, inv, ncell, axis, nslab, width, wrap = periodic_layout(pos, radius, skin, dim2, period, box_lo,
+                                                               slabs if slabs > 0 else max_slabs(n))
+    ncells = ncell[0] * ncell[1] * ncell[2]
+    slab = np.empty(n, dtype=np.int64)
+    cell_of = np.empty(n, dtype=np.int64)
+    slab_start = np.zeros(nslab + 1, dtype=np.int64)
+    cstart = np.zeros(ncells + 1, dtype=np.int64)
+    for i in range(n):
+        s = min(nslab - 1, max(0, int((pos[i, axis] - lo[axis]) / width)))
+        kx = min(max(int((pos[i, 0] - lo[0]) * inv[0]), 0), ncell[0] - 1)
+        ky = min(max(int((pos[i, 1] - lo[1]) * inv[1]), 0), ncell[1] - 1)
+        kz = min(max(int((pos[i, 2] - lo[2]) * inv[2]), 0), ncell[2] - 1)
+        slab[i] = s
+        cell_of[i] = (kx * ncell[1] + ky) * ncell[2] + kz
+        slab_start[s + 1] += 1
+        cstart[cell_of[i] + 1] += 1
+    for k in range(nslab):
+        slab_start[k + 1] += slab_start[k]
+    for c in range(ncells):
+        cstart[c + 1] += cstart[c]
+    sfill = slab_start[:-1].copy()
+    cfill = cstart[:-1].copy()
+    slab_members = np.empty(n, dtype=np.int64)
+    cmembers = np.empty(n, dtype=np.int64)
+    for i in range(n):  # ascending index within each slab and cell
+        slab_members[sfill[slab[i]]] = i
+        sfill[slab[i]] += 1
+        cmembers[cfill[cell_of[i]]] = i
+        cfill[cell_of[i]] += 1
+    counts = np.zeros(n + 1, dtype=np.int64)
+    none = np.empty(0, dtype=np.int32)
+    for i in prange(n):
+        counts[i + 1] = _periodic_row(i, pos, radius, skin, period, ncell, cell_of, cstart, cmembers, slab, wrap,
+                                      none, True)
+    row_start = np.cumsum(counts)
+    partner = np.empty(row_start[n], dtype=np.int32)
+    for i in prange(n):
+        row = partner[row_start[i]:row_start[i + 1]]
+        _periodic_row(i, pos, radius, skin, period, ncell, cell_of, cstart, cmembers, slab, wrap, row, False)
+        row.sort()
+    return row_start, partner, slab_start, slab_members
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def contacts_first_periodic(pos, radius, row_start, partner, hist, period):
+    """``contacts_first`` with distances between nearest images (a box with periodic sides)."""
+    n = row_start.shape[0] - 1
+    m = 0
+    for i in range(n):
+        m = max(m, row_start[i + 1] - row_start[i])
+    for c in prange((n + ROWS_PER_ITEM - 1) // ROWS_PER_ITEM):
+        _contacts_first_rows_periodic(c * ROWS_PER_ITEM, min(n, (c + 1) * ROWS_PER_ITEM), m, pos, radius, row_start,
+                                      partner, hist, period)
+
+
+@njit(cache=True, error_model="numpy")
+def _contacts_first_rows_periodic(lo, hi, m, pos, radius, row_start, partner, hist, period):
+    """``_contacts_first_rows`` by nearest image."""
+    tmp_p = np.empty(m, dtype=partner.dtype)
+    width = hist.shape[1]
+    tmp_h = np.empty((m, width))
+    for i in range(lo, hi):
+        r0 = row_start[i]
+        r1 = row_start[i + 1]
+        if r1 - r0 < 2:
+            continue
+        a = 0
+        b = 0
+        for p in range(r0, r1):
+            j = partner[p]
+            rx = nearest_image(pos[i, 0] - pos[j, 0], period[0])
+            ry = nearest_image(pos[i, 1] - pos[j, 1], period[1])
+            rz = nearest_image(pos[i, 2] - pos[j, 2], period[2])
+            cut = radius[i] + radius[j]
+            if rx * rx + ry * ry + rz * rz < cut * cut:
+                q = a
+                a += 1
+            else:
+                b += 1
+                q = m - b
+            tmp_p[q] = partner[p]
+            for e in range(width):
+                tmp_h[q, e] = hist[p, e]
+        for k in range(a):
+            partner[r0 + k] = tmp_p[k]
+            for e in range(width):
+                hist[r0 + k, e] = tmp_h[k, e]
+        for k in range(b):
+            partner[r0 + a + k] = tmp_p[m - 1 - k]
+            for e in range(width):
+                hist[r0 + a + k, e] = tmp_h[m - 1 - k, e]

@@ -49,6 +49,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ._neighbours_kernels import nearest_image
 from .contact._dispatch import contact_force, contact_force_full
 from .contact.base import N_SLOTS, SLOT_EXTENDED, SLOT_ROLLING_FRICTION
 
@@ -127,10 +128,11 @@ def make_work(pp, row_start, hist, slab_start, slab_members, nthreads):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _filter(flat, s, pos, radius, row_start, partner, slab_start, slab_members, hist, touch, cbuf, ibuf):
+def _filter(flat, per, period, s, pos, radius, row_start, partner, slab_start, slab_members, hist, touch, cbuf, ibuf):
     """The touching pairs of slab s into cbuf/ibuf (returns their number); springs of ended contacts reset.
     With a fourth history column (an adhesive law) a pair is in contact while r < a_i + a_j + hist[3]: its
-    pull-off distance once formed, 0 before."""
+    pull-off distance once formed, 0 before. ``per`` (a constant where inlined): a box with periodic sides,
+    offsets by nearest image (``_neighbours_kernels.nearest_image``, ``period`` (3,) its lengths)."""
     wide = hist.shape[1] > 3
     us = U(s)
     k = U(0)
@@ -146,6 +148,11 @@ def _filter(flat, s, pos, radius, row_start, partner, slab_start, slab_members, 
             rx = xi - pos[j, U(0)]
             ry = yi - pos[j, U(1)]
             rz = 0.0 if flat else zi - pos[j, U(2)]
+            if per:
+                rx = nearest_image(rx, period[0])
+                ry = nearest_image(ry, period[1])
+                if not flat:
+                    rz = nearest_image(rz, period[2])
             cut = ai + radius[j]
             if wide:
                 cut += hist[p, U(3)]
@@ -164,9 +171,10 @@ def _filter(flat, s, pos, radius, row_start, partner, slab_start, slab_members, 
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _gather(flat, uniform, ext, c0, n, pos, vel, omega, radius, mass, species, pp, partner, hist, cbuf, ibuf, G):
+def _gather(flat, per, period, uniform, ext, c0, n, pos, vel, omega, radius, mass, species, pp, partner, hist, cbuf,
+            ibuf, G):
     """What the law reads of contacts c0 … c0 + n − 1 of the list into the rows of G (ext: also the relative
-    spin)."""
+    spin). ``per``: centre offsets by nearest image (as ``_filter``)."""
     for c_ in range(n):
         c = U(c_)
         p = U(cbuf[U(c0) + c])
@@ -174,8 +182,12 @@ def _gather(flat, uniform, ext, c0, n, pos, vel, omega, radius, mass, species, p
         j = U(partner[p])
         ai = radius[i]
         aj = radius[j]
-        G[U(G_RX * CHUNK) + c] = pos[i, U(0)] - pos[j, U(0)]
-        G[U(G_RY * CHUNK) + c] = pos[i, U(1)] - pos[j, U(1)]
+        if per:
+            G[U(G_RX * CHUNK) + c] = nearest_image(pos[i, U(0)] - pos[j, U(0)], period[0])
+            G[U(G_RY * CHUNK) + c] = nearest_image(pos[i, U(1)] - pos[j, U(1)], period[1])
+        else:
+            G[U(G_RX * CHUNK) + c] = pos[i, U(0)] - pos[j, U(0)]
+            G[U(G_RY * CHUNK) + c] = pos[i, U(1)] - pos[j, U(1)]
         G[U(G_AI * CHUNK) + c] = ai
         G[U(G_AJ * CHUNK) + c] = aj
         G[U(G_MI * CHUNK) + c] = mass[i]
@@ -186,7 +198,10 @@ def _gather(flat, uniform, ext, c0, n, pos, vel, omega, radius, mass, species, p
         G[U(G_HX * CHUNK) + c] = hist[p, U(0)]
         G[U(G_HY * CHUNK) + c] = hist[p, U(1)]
         if not flat:
-            G[U(G_RZ * CHUNK) + c] = pos[i, U(2)] - pos[j, U(2)]
+            if per:
+                G[U(G_RZ * CHUNK) + c] = nearest_image(pos[i, U(2)] - pos[j, U(2)], period[2])
+            else:
+                G[U(G_RZ * CHUNK) + c] = pos[i, U(2)] - pos[j, U(2)]
             G[U(G_VZ * CHUNK) + c] = vel[i, U(2)] - vel[j, U(2)]
             G[U(G_OX * CHUNK) + c] = ai * omega[i, U(0)] + aj * omega[j, U(0)]
             G[U(G_OY * CHUNK) + c] = ai * omega[i, U(1)] + aj * omega[j, U(1)]
@@ -344,15 +359,19 @@ def _scatter(flat, ext, c0, n, partner, hist, sum_f, sum_c, cbuf, ibuf, out):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _slab_body(flat, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform, ext):
+def _slab_body(flat, per, period, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform,
+               ext):
     """The contacts of slab s: filter, then gather, law and scatter chunk by chunk.
-    state: (pos, vel, omega, radius, mass, species); lists: (row_start, partner, slab_start, slab_members)."""
+    state: (pos, vel, omega, radius, mass, species); lists: (row_start, partner, slab_start, slab_members).
+    ``per``: a box with periodic sides of lengths ``period`` (centre offsets by nearest image)."""
     pos, vel, omega, radius, mass, species = state
     row_start, partner, slab_start, slab_members = lists
-    k = _filter(flat, s, pos, radius, row_start, partner, slab_start, slab_members, hist, touch, cbuf, ibuf)
+    k = _filter(flat, per, period, s, pos, radius, row_start, partner, slab_start, slab_members, hist, touch, cbuf,
+                ibuf)
     for c0 in range(0, k, CHUNK):
         n = min(CHUNK, k - c0)
-        _gather(flat, uniform, ext, c0, n, pos, vel, omega, radius, mass, species, pp, partner, hist, cbuf, ibuf, G)
+        _gather(flat, per, period, uniform, ext, c0, n, pos, vel, omega, radius, mass, species, pp, partner, hist, cbuf,
+                ibuf, G)
         if ext:
             _law_ext(n, G, out, dt, update)
         else:
@@ -361,27 +380,54 @@ def _slab_body(flat, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch,
 
 
 @njit(cache=True, error_model="numpy")
-def _slab(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform, ext):
+def _slab(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform, ext, period):
     """``_slab_body`` in 3D."""
-    _slab_body(False, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform, ext)
+    _slab_body(False, False, period, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out,
+               uniform, ext)
 
 
 @njit(cache=True, error_model="numpy")
-def _slab_flat(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform, ext):
+def _slab_flat(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform, ext, period):
     """``_slab_body`` of a flat 2D bed."""
-    _slab_body(True, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform, ext)
+    _slab_body(True, False, period, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out,
+               uniform, ext)
 
 
 @njit(cache=True, error_model="numpy")
-def chunk_run(start, stop, flat, state, pp, lists, hist, dt, update, sum_f, sum_c, work, t):
-    """The contacts of slabs start, start + 2, … below stop (one parity) with thread t's work rows."""
+def _slab_periodic(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform, ext,
+                   period):
+    """``_slab_body`` in 3D, a box with periodic sides."""
+    _slab_body(False, True, period, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out,
+               uniform, ext)
+
+
+@njit(cache=True, error_model="numpy")
+def _slab_flat_periodic(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform, ext,
+                        period):
+    """``_slab_body`` of a flat 2D bed, a box with periodic sides."""
+    _slab_body(True, True, period, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out,
+               uniform, ext)
+
+
+@njit(cache=True, error_model="numpy")
+def chunk_run(start, stop, flat, state, pp, lists, hist, dt, update, sum_f, sum_c, work, t, period):
+    """The contacts of slabs start, start + 2, … below stop (one parity) with thread t's work rows.
+    ``period`` (3,): the box's length along each periodic axis, 0 elsewhere (all zero: no periodic side)."""
     cbuf, ibuf, G, out, touch, uniform, ext = work
     cb = cbuf[t]
     ib = ibuf[t]
     g = G[t]
     o = out[t]
+    per = (period[0] != 0.0) | (period[1] != 0.0) | (period[2] != 0.0)
     for s in range(start, stop, 2):
-        if flat:
-            _slab_flat(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform, ext)
+        if per:
+            if flat:
+                _slab_flat_periodic(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform,
+                                    ext, period)
+            else:
+                _slab_periodic(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform, ext,
+                               period)
+        elif flat:
+            _slab_flat(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform, ext, period)
         else:
-            _slab(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform, ext)
+            _slab(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform, ext, period)

@@ -19,7 +19,8 @@ import numpy as np
 from numba import njit, prange
 
 from ._pair_kernels import chunk_run, make_work
-from ._neighbours_kernels import build_pairs, carry_history, cell_order, contacts_first, renumber_pairs
+from ._neighbours_kernels import (build_pairs, build_pairs_periodic, carry_history, cell_order, contacts_first,
+                                  contacts_first_periodic, renumber_pairs)
 from .contact._dispatch import contact_force, contact_force_full
 from .contact.base import N_SLOTS, SLOT_EXTENDED, SLOT_ROLLING_FRICTION
 
@@ -144,30 +145,30 @@ def thread_blocks(row_start, slab_start, slab_members, nthreads):
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
-def _chunk_forces_parallel(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, work):
+def _chunk_forces_parallel(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, work, period):
     """Phase 0 runs the even slabs, phase 1 the odd ones; thread k the slabs of its block (``thread_blocks``),
     with row k of the work arrays."""
     nthreads = block.shape[0] - 1
     for phase in range(2):
         for k in prange(nthreads):
             chunk_run(block[k] + (block[k] + phase) % 2, block[k + 1], flat, state, pp, lists, hist, dt, update,
-                      sum_f, sum_c, work, k)
+                      sum_f, sum_c, work, k, period)
 
 
 @njit(cache=True, error_model="numpy")
-def _chunk_forces(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, work):
+def _chunk_forces(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, work, period):
     """The contacts of all slabs: the even ones, then the odd ones (see ``pair_forces``)."""
     if block.shape[0] > 2:
-        _chunk_forces_parallel(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, work)
+        _chunk_forces_parallel(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, work, period)
         return
     nslab = lists[2].shape[0] - 1
     for phase in range(2):
-        chunk_run(phase, nslab, flat, state, pp, lists, hist, dt, update, sum_f, sum_c, work, 0)
+        chunk_run(phase, nslab, flat, state, pp, lists, hist, dt, update, sum_f, sum_c, work, 0, period)
 
 
 @njit(cache=True, error_model="numpy")
 def pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
-                dt, update, sum_f, sum_c, block, flat=False, work=None):
+                dt, update, sum_f, sum_c, block, flat=False, work=None, period=None):
     """Add the contact force sums (sum_f) and Σ −n × F_t (sum_c, torque per unit lever arm) per particle.
 
     sum_f and sum_c must be zero on entry (gather_forces leaves them so). The contact law runs vectorised
@@ -178,18 +179,24 @@ def pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, 
     ``flat``: a flat 2D bed (``is_flat``), whose sum_f z and sum_c x, y are left as they are.
     ``work``: ``_pair_kernels.make_work`` for this list and at least len(block) − 1 threads (made here if
     None or too small).
+    ``period``: (3,) the box length along each periodic axis, 0 elsewhere (None: no periodic side); centre
+    offsets are then taken by nearest image, with a list from ``build_pairs_periodic``.
     """
+    if period is None:
+        box = np.zeros(3)
+    else:
+        box = period
     state = (pos, vel, omega, radius, mass, species)
     lists = (row_start, partner, slab_start, slab_members)
     nthreads = block.shape[0] - 1
     if work is None:
         _chunk_forces(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat,
-                      make_work(pp, row_start, hist, slab_start, slab_members, nthreads))
+                      make_work(pp, row_start, hist, slab_start, slab_members, nthreads), box)
     elif work[0].shape[0] < nthreads:
         _chunk_forces(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat,
-                      make_work(pp, row_start, hist, slab_start, slab_members, nthreads))
+                      make_work(pp, row_start, hist, slab_start, slab_members, nthreads), box)
     else:
-        _chunk_forces(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, work)
+        _chunk_forces(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, work, box)
 
 
 @njit(cache=True, error_model="numpy")
@@ -665,6 +672,40 @@ def rebuild(pos, radius, skin, dim2, row_start, partner, hist, ref_pos):
 
 
 @njit(cache=True, error_model="numpy")
+def rebuild_periodic(pos, radius, skin, dim2, row_start, partner, hist, ref_pos, period, box_lo):
+    """``rebuild`` for a box with periodic sides (``build_pairs_periodic``, ``contacts_first_periodic``): the
+    history of a pair is carried over by the particles' numbers, so a contact keeps its spring across a
+    wrap of either particle."""
+    new_start, new_partner, slab_start, slab_members = build_pairs_periodic(pos, radius, skin, dim2, period, box_lo)
+    new_hist = carry_history(row_start, partner, hist, new_start, new_partner)
+    contacts_first_periodic(pos, radius, new_start, new_partner, new_hist, period)
+    ref_pos[:, :] = pos
+    return new_start, new_partner, new_hist, slab_start, slab_members
+
+
+@njit(cache=True, error_model="numpy")
+def wrap_positions(pos, ref_pos, image, period, box_lo):
+    """Bring every centre back into the box along each periodic axis d (``period[d]`` = L_d > 0):
+    x_d ← x_d − k L_d with k = floor((x_d − lo_d) / L_d), and image[i, d] += k, so that the unwrapped
+    position x_d + image_d L_d is continuous. ``ref_pos`` (the centres at the last list build) moves by the
+    same k L_d: the displacement since the build, which decides the next rebuild, is unchanged. The nearest
+    image convention (Allen & Tildesley 1987 §1.5.3) then holds for the pair offsets."""
+    n = pos.shape[0]
+    for d in range(3):
+        length = period[d]
+        if length > 0.0:
+            lo = box_lo[d]
+            hi = lo + length
+            for i in range(n):
+                x = pos[i, d]
+                if x >= hi or x < lo:
+                    k = math.floor((x - lo) / length)
+                    pos[i, d] = x - k * length
+                    ref_pos[i, d] -= k * length
+                    image[i, d] += np.int64(k)
+
+
+@njit(cache=True, error_model="numpy")
 def _permute(a, order):
     """a[k] = a[order[k]] along the first axis, in place (a 2D and C-contiguous)."""
     old = a.copy()
@@ -676,7 +717,7 @@ def _permute(a, order):
 
 @njit(cache=True, error_model="numpy")
 def reorder(pos, vel, omega, force, torque, radius, mass, inertia, inv_mass, inv_inertia, species, ids, ext_force,
-            ext_damping, wall_hist, row_start, partner, hist, skin, dim2):
+            ext_damping, wall_hist, row_start, partner, hist, skin, dim2, image=None):
     """Renumber the particles in slab and cell order (``cell_order``): every per-particle array is permuted
     in place, the half list renamed (``renumber_pairs``; the caller rebuilds it). Returns (order, row_start,
     partner, hist): new particle k is former particle order[k]; ``ids`` keeps each particle's original number.
@@ -686,7 +727,8 @@ def reorder(pos, vel, omega, force, torque, radius, mass, inertia, inv_mass, inv
     into the same cache lines of the force sums (false sharing). In slab order each thread writes its own
     run. Every array is permuted alike, so the physics is unchanged; sums of forces are taken in another
     order, so results differ from an unsorted run at round-off level (and are again the same for any
-    number of threads)."""
+    number of threads). ``image`` (N, 3) int64, the periodic image counts (``wrap_positions``), is permuted
+    alike where given."""
     n = pos.shape[0]
     order = cell_order(pos, radius, skin, dim2)
     new_index = np.empty(n, dtype=np.int64)
@@ -698,6 +740,8 @@ def reorder(pos, vel, omega, force, torque, radius, mass, inertia, inv_mass, inv
         _permute(b.reshape((n, 1)), order)
     _permute(species.reshape((n, 1)), order)
     _permute(ids.reshape((n, 1)), order)
+    if image is not None:
+        _permute(image, order)
     _permute(wall_hist.reshape((n, wall_hist.shape[1] * wall_hist.shape[2])), order)
     row_start, partner, hist = renumber_pairs(row_start, partner, hist, new_index)
     return order, row_start, partner, hist
@@ -706,14 +750,16 @@ def reorder(pos, vel, omega, force, torque, radius, mass, inertia, inv_mass, inv
 @njit(cache=True, error_model="numpy")
 def compute_forces(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, wall_point0, wall_normal,
                    wall_hist, gravity, ext_force, ext_damping, dim2, row_start, partner, hist, slab_start, slab_members,
-                   t, dt, update, force, torque, nthreads):
-    """Forces and torques at the current state (no integration; history updated only if ``update``)."""
+                   t, dt, update, force, torque, nthreads, period):
+    """Forces and torques at the current state (no integration; history updated only if ``update``).
+    ``period`` (3,): the box length along each periodic axis, 0 elsewhere."""
     sum_f = np.zeros_like(force)
     sum_c = np.zeros_like(force)
     block = thread_blocks(row_start, slab_start, slab_members, nthreads)
     flat = dim2 and is_flat(pos, vel, omega, hist)
     pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
-                dt, update, sum_f, sum_c, block, flat, make_work(pp, row_start, hist, slab_start, slab_members, nthreads))
+                dt, update, sum_f, sum_c, block, flat, make_work(pp, row_start, hist, slab_start, slab_members, nthreads),
+                period)
     near_count, near_wall = all_walls(pos.shape[0], wall_normal.shape[0])
     # has_ext and mode as run-time values, as advance passes them: a constant argument is a literal type to
     # Numba, which would compile gather_forces once more for it (and with it all it calls)
@@ -729,14 +775,15 @@ def compute_forces(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, 
 def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia, species, pp, pw,
             wall_motion, wall_point0, wall_normal, wall_hist, gravity, ext_force, ext_damping, dim2,
             row_start, partner, hist, slab_start, slab_members, ref_pos, skin, step0, dt, nsteps, nthreads,
-            inertia, ids, reorder_interval, last_reorder, wall_touch, near_count, near_wall):
+            inertia, ids, reorder_interval, last_reorder, wall_touch, near_count, near_wall, period, box_lo, image):
     """Run ``nsteps`` velocity-Verlet DEM steps from step ``step0`` (time step0 * dt).
 
     Order of one step::
 
         v += F/m dt/2, ω += T/I dt/2          (Sun 2007 eqs 15-16, half kick)
         x += v dt                              (drift)
-        rebuild the Verlet list if any particle moved more than skin/2
+        wrap the centres into the box along its periodic axes (``wrap_positions``; none: nothing done)
+    rebuild the Verlet list if any particle moved more than skin/2
         F, T at the new positions             (eqs 17-24; walls; gravity; external force)
         v += F/m dt/2, ω += T/I dt/2          (half kick)
 
@@ -754,7 +801,11 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
     order[k]; empty if none).
     ``wall_touch``, ``near_count``, ``near_wall``: the walls within reach (``near_walls``), made anew at each
     rebuild; the caller keeps them between calls (made at set-up and after a restore).
+    ``period`` (3,): the box length along each periodic axis, 0 elsewhere; ``box_lo`` (3,) the box's lower
+    corner; ``image`` (N, 3) int64 the image counts, updated as particles wrap. With a periodic axis the
+    list is ``build_pairs_periodic``'s and pair offsets are taken by nearest image.
     """
+    per = (period[0] != 0.0) | (period[1] != 0.0) | (period[2] != 0.0)
     limit2 = (0.5 * skin) ** 2
     update = nsteps > 0  # a run-time True, as compute_forces passes it (a literal would compile pair_forces twice)
     sum_f = np.zeros_like(force)
@@ -774,16 +825,22 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
     flat = dim2 and is_flat(pos, vel, omega, hist)
     for s in range(nsteps):
         t = (step0 + s + 1) * dt
+        if per:
+            wrap_positions(pos, ref_pos, image, period, box_lo)
         if moved > 0:
             if reorder_interval > 0 and step0 + s - last_reorder >= reorder_interval:
                 order, row_start, partner, hist = reorder(
                     pos, vel, omega, force, torque, radius, mass, inertia, inv_mass, inv_inertia, species, ids,
-                    ext_force, ext_damping, wall_hist, row_start, partner, hist, skin, dim2)
+                    ext_force, ext_damping, wall_hist, row_start, partner, hist, skin, dim2, image)
                 combined = order if combined.shape[0] == 0 else combined[order]
                 last_reorder = step0 + s
                 reorders += 1
-            row_start, partner, hist, slab_start, slab_members = rebuild(
-                pos, radius, skin, dim2, row_start, partner, hist, ref_pos)
+            if per:
+                row_start, partner, hist, slab_start, slab_members = rebuild_periodic(
+                    pos, radius, skin, dim2, row_start, partner, hist, ref_pos, period, box_lo)
+            else:
+                row_start, partner, hist, slab_start, slab_members = rebuild(
+                    pos, radius, skin, dim2, row_start, partner, hist, ref_pos)
             block = thread_blocks(row_start, slab_start, slab_members, nthreads)
             first = slab_start[block]
             work = make_work(pp, row_start, hist, slab_start, slab_members, nthreads)
@@ -791,7 +848,7 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
                        near_count, near_wall, first)
             rebuilds += 1
         pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
-                    dt, update, sum_f, sum_c, block, flat, work)
+                    dt, update, sum_f, sum_c, block, flat, work, period)
         mode = 2 if s < nsteps - 1 else 1
         moved = gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
                               wall_axis, wall_hist, wall_touch, near_count, near_wall, gravity, ext_force, ext_damping,

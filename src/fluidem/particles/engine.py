@@ -26,7 +26,8 @@ class ParticleEngine:
     Attributes set here: ``case``, ``dim2`` (centres in the x–y plane), ``walls`` (``Walls``),
     ``wall_point0, wall_normal, wall_motion`` (their arrays), ``state``, ``inv_mass``, ``inv_inertia``
     (per particle [1/kg], [1/(kg m²)]), ``gravity`` (3,) [m/s²] and ``ext_force`` (N, 3) [N], the external
-    (gas) force a coupling sets. A subclass sets ``dt``, ``time``, ``steps``, ``rebuilds`` and the contact
+    (gas) force a coupling sets; ``period`` (3,) [m], the box length along each periodic axis (0 elsewhere),
+    and ``periodic`` (any such axis). A subclass sets ``dt``, ``time``, ``steps``, ``rebuilds`` and the contact
     list ``row_start, partner`` (CSR of the pairs that may touch) and implements ``advance``,
     ``checkpoint_arrays``, ``checkpoint_scalars`` and ``restore``.
     """
@@ -40,6 +41,9 @@ class ParticleEngine:
         self.dim2 = case.particles.dimensions == 2
         self.walls = build_walls(case)
         self.wall_point0, self.wall_normal, self.wall_motion = self.walls.arrays()
+        # periodic sides of the box (walls.periodic): its length along each periodic axis, 0 elsewhere
+        self.period = self.walls.period.copy()
+        self.periodic = bool(np.any(self.period > 0.0))
         if state is None:
             pos, vel, diam, spec = place(case, self.walls)
             dens = np.array([s.density for s in case.particles.species])
@@ -142,6 +146,8 @@ class ParticleEngine:
                 a[...] = arrays[key]
             elif k == "ids":
                 a[...] = np.arange(a.shape[0])
+            elif k == "image":  # checkpoints from before periodic sides: no crossing counted
+                a[...] = 0
             else:
                 raise KeyError(key)
         self._derive_inverses()
@@ -152,7 +158,7 @@ class ParticleEngine:
         st = self.state
         i, j = self._touching_pairs()
         if i.size:
-            d = np.linalg.norm(st.position[i] - st.position[j], axis=1)
+            d = np.linalg.norm(self.minimum_image(st.position[i] - st.position[j]), axis=1)
             ov = st.radius[i] + st.radius[j] - d
             bad = np.flatnonzero(ov > tolerance * (st.radius[i] + st.radius[j]))
             if bad.size:
@@ -167,6 +173,16 @@ class ParticleEngine:
                 raise CaseError(
                     f"particles.placement: initial particles cross wall {plane.name}: {bad.size} particle(s), e.g. "
                     f"particle {bad[0]} by {-gap[bad[0]]:.3g} m")
+
+    def minimum_image(self, r: np.ndarray) -> np.ndarray:
+        """Offsets r = x_i − x_j (…, 3) [m] as between nearest images across the periodic sides (r − L
+        round(r / L) on each periodic axis, Allen & Tildesley 1987 eq. 1.9); r itself where none is periodic."""
+        if not self.periodic:
+            return r
+        per = self.period > 0.0
+        r = np.array(r, dtype=float)
+        r[..., per] -= self.period[per] * np.round(r[..., per] / self.period[per])
+        return r
 
     def _touching_pairs(self) -> tuple[np.ndarray, np.ndarray]:
         """(i, j) int64 arrays of the pairs whose spheres touch or overlap, each pair once."""

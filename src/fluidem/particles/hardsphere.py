@@ -95,6 +95,12 @@ class HardSphereEngine(ParticleEngine):
 
     def __init__(self, case, state: ParticleState | None = None):
         walls = build_walls(case)
+        if np.any(walls.period > 0.0):
+            axes = [w.periodic for w in case.walls if w.kind == "box" and w.periodic][0]
+            raise CaseError(
+                f"walls: a box with periodic = {list(axes)}; the hard-sphere engine (particles.contact.model = "
+                f"{case.particles.contact.model!r}) has no periodic sides yet; use a soft-sphere contact model or "
+                "remove periodic")
         motion = walls.arrays()[2]
         for k, plane in enumerate(walls.planes):
             if int(motion[k, 0]) != 0:

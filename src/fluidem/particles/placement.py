@@ -1,7 +1,7 @@
 """Initial particle sets: diameters from each species' distribution, then positions.
 
 Methods (``particles.placement.method``): ``random`` (non-overlapping random fill of a
-region), ``lattice`` (square/cubic lattice with a small random disturbance, Hoomans
+region; across a periodic side of the box, by nearest image), ``lattice`` (square/cubic lattice with a small random disturbance, Hoomans
 1996 §4.1) and ``file`` (CSV or HDF5 list). Overlaps and particles outside the walls
 are errors that name the particles.
 """
@@ -74,7 +74,10 @@ def place(case, walls) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     z0 = 0.5 * (lo[2] + hi[2]) if dim2 else 0.0
     if pl.method == "random":
         order = np.argsort(-diam, kind="stable")
-        pos_sorted, placed = random_fill(0.5 * diam[order], lo, hi, dim2, z0, pl.seed % (2**31), 20000)
+        # a periodic axis of the box that the region spans whole: centres anywhere along it, no overlap across
+        period = np.where((walls.period > 0.0) & np.isclose(lo, walls.period_lower, rtol=0.0, atol=1e-12)
+                          & np.isclose(hi - lo, walls.period, rtol=1e-12, atol=0.0), walls.period, 0.0)
+        pos_sorted, placed = random_fill(0.5 * diam[order], lo, hi, dim2, z0, pl.seed % (2**31), 20000, period)
         if placed < n:
             frac = _filled_fraction(diam, lo, hi, dim2)
             raise CaseError(

@@ -70,6 +70,7 @@ class Population:
         self.dim2 = dim2
         end = case.time.end
         self.inlets = []
+        self._check_periodic_sides(case, engine)
         for spec in case.inlets:
             k = names.index(spec.species) if spec.species is not None else 0
             z0 = self._plane_z(spec) if dim2 else 0.0
@@ -83,6 +84,27 @@ class Population:
         st = engine.state
         self.next_id = int(st.ids.max()) + 1 if st.n else 0
         self.deficit_warned = False
+
+    @staticmethod
+    def _check_periodic_sides(case, engine) -> None:
+        """An inlet's box keeps one largest diameter from a periodic side: the insertion checks overlaps inside
+        the box and beside it, not with the images across the side."""
+        period = getattr(engine, "period", None)
+        if period is None or not np.any(period > 0.0):
+            return
+        lo = engine.box_lo
+        gap = 2.0 * engine.largest_radius
+        for j, spec in enumerate(case.inlets):
+            for d in np.flatnonzero(period > 0.0):
+                if spec.lower[d] < lo[d] + gap or spec.upper[d] > lo[d] + period[d] - gap:
+                    from ..errors import CaseError
+
+                    ax = "xyz"[d]
+                    raise CaseError(
+                        f"inlets.{j} ({spec.name!r}): lower {ax} = {spec.lower[d]:g}, upper {ax} = {spec.upper[d]:g} m "
+                        f"reaches within one largest diameter ({gap:.4g} m) of the periodic sides at {lo[d]:g} and "
+                        f"{lo[d] + period[d]:g} m; keep the insertion box from {lo[d] + gap:.4g} to "
+                        f"{lo[d] + period[d] - gap:.4g} m along {ax}")
 
     def _plane_z(self, spec) -> float:
         """2D: the z of the particles' centres (the engine's particles, else the middle of the walls' box, else

@@ -14,7 +14,8 @@ import numpy as np
 from ..errors import CaseError
 from ..state import ParticleState
 from . import _softsphere_kernels as K
-from ._neighbours_kernels import build_pairs, carry_history, contacts_first
+from ._neighbours_kernels import (build_pairs, build_pairs_periodic, carry_history, contacts_first,
+                                  contacts_first_periodic)
 from ._population_kernels import drop_pairs
 from .contact.base import N_SLOTS
 from .engine import ParticleEngine
@@ -41,6 +42,10 @@ class SoftSphereEngine(ParticleEngine):
         dmax = 2.0 * self.largest_radius  # of the particles there and of those inlets may insert
         self.skin = case.neighbours.skin if case.neighbours.skin is not None else 0.25 * dmax
         self._check_pull_off()
+        self.box_lo = self.walls.period_lower.copy()
+        if self.periodic:
+            self._check_period(dmax)
+            K.wrap_positions(st.position, st.position.copy(), st.image, self.period, self.box_lo)
         self.dt = self._time_step()
         self.time = 0.0
         self.steps = 0
@@ -51,10 +56,12 @@ class SoftSphereEngine(ParticleEngine):
         if self.reorder_interval > 0:
             self._renumber()
         self.ref_pos = st.position.copy()
-        self.row_start, self.partner, self.slab_start, self.slab_members = build_pairs(
-            st.position, st.radius, self.skin, self.dim2)
+        self.row_start, self.partner, self.slab_start, self.slab_members = self._build_pairs(self.skin)
         self.hist = np.zeros((self.partner.shape[0], 4 if self.pair_adhesive else 3))
-        contacts_first(st.position, st.radius, self.row_start, self.partner, self.hist)  # as every rebuild leaves it
+        if self.periodic:
+            contacts_first_periodic(st.position, st.radius, self.row_start, self.partner, self.hist, self.period)
+        else:
+            contacts_first(st.position, st.radius, self.row_start, self.partner, self.hist)  # as every rebuild leaves it
         self._reach_walls()
         self.reorder_listeners = []  # callables f(order) told of each renumbering (new k is former order[k])
         self._compute_forces(update=False)
@@ -120,6 +127,26 @@ class SoftSphereEngine(ParticleEngine):
             r_max[k] = max(r_max[k], 0.5 * hi)
             m_min[k] = min(m_min[k], sp[k].density * math.pi / 6.0 * lo**3)
 
+    def _check_period(self, dmax: float) -> None:
+        """A periodic box must be at least twice the cut-off 2 R_max + skin long on each periodic axis, so that
+        two particles interact through one image only (nearest image convention); refuse a shorter one."""
+        need = 2.0 * (dmax + self.skin)
+        for d in np.flatnonzero(self.period > 0.0):
+            if self.period[d] < need:
+                ax = "xyz"[d]
+                raise CaseError(
+                    f"walls: the box is periodic along {ax} with length {self.period[d]:.4g} m, below twice the "
+                    f"neighbour cut-off (largest diameter {dmax:.4g} m + neighbours.skin {self.skin:.4g} m): "
+                    f"{need:.4g} m; make the box longer along {ax} or the skin smaller")
+
+    def _build_pairs(self, skin: float):
+        """The half list and slabs around the current positions (``build_pairs``; by nearest image in a box
+        with periodic sides, ``build_pairs_periodic``)."""
+        st = self.state
+        if self.periodic:
+            return build_pairs_periodic(st.position, st.radius, skin, self.dim2, self.period, self.box_lo)
+        return build_pairs(st.position, st.radius, skin, self.dim2)
+
     def _check_pull_off(self) -> None:
         """An adhesive contact lasts until its pull-off distance, so the Verlet list must keep pairs (and the
         wall reach must keep walls) that far apart: refuse a skin below the largest pull-off distance."""
@@ -153,7 +180,7 @@ class SoftSphereEngine(ParticleEngine):
         no_list = (np.zeros(st.n + 1, dtype=np.int64), np.empty(0, dtype=np.int32), np.empty((0, 3)))
         K.reorder(st.position, st.velocity, st.omega, st.force, st.torque, st.radius, st.mass, st.inertia,
                   self.inv_mass, self.inv_inertia, st.species, st.ids, self.ext_force, self.ext_damping, self.wall_hist,
-                  *no_list, self.skin, self.dim2)
+                  *no_list, self.skin, self.dim2, st.image)
 
     def _reorder_interval(self) -> int:
         """Steps between renumberings of the particles in cell order: the case's ``neighbours.reorder_interval``,
@@ -184,7 +211,7 @@ class SoftSphereEngine(ParticleEngine):
 
     def _touching_pairs(self) -> tuple[np.ndarray, np.ndarray]:
         st = self.state
-        rs, partner, _, _ = build_pairs(st.position, st.radius, 0.0, self.dim2)
+        rs, partner, _, _ = self._build_pairs(0.0)
         return np.repeat(np.arange(st.n), np.diff(rs)), partner
 
     # ------------------------------------------------------------ stepping
@@ -194,7 +221,7 @@ class SoftSphereEngine(ParticleEngine):
                          self.wall_motion, self.wall_point0, self.wall_normal, self.wall_hist, self.gravity,
                          self.ext_force, self.ext_damping, self.dim2, self.row_start, self.partner, self.hist, self.slab_start,
                          self.slab_members, self.time, self.dt, update, st.force, st.torque,
-                         numba.get_num_threads())
+                         numba.get_num_threads(), self.period)
 
     def external_force(self) -> np.ndarray:
         """The external (gas) force on each particle at the current velocity, ext_force − c v [N], (N, 3)."""
@@ -212,7 +239,7 @@ class SoftSphereEngine(ParticleEngine):
             self.wall_hist, self.gravity, self.ext_force, self.ext_damping, self.dim2, self.row_start, self.partner, self.hist,
             self.slab_start, self.slab_members, self.ref_pos, self.skin, self.steps, self.dt, nsteps,
             numba.get_num_threads(), st.inertia, st.ids, self.reorder_interval, self.last_reorder,
-            self.wall_touch, self.near_count, self.near_wall)
+            self.wall_touch, self.near_count, self.near_wall, self.period, self.box_lo, st.image)
         self.steps += nsteps
         self.time = self.steps * self.dt
         self.rebuilds += nreb
@@ -250,10 +277,12 @@ class SoftSphereEngine(ParticleEngine):
             added.torque[...] = 0.0
         self.state = st = self._replaced_state(keep, added)
         self._derive_inverses()
-        self.row_start, self.partner, self.slab_start, self.slab_members = build_pairs(
-            st.position, st.radius, self.skin, self.dim2)
+        self.row_start, self.partner, self.slab_start, self.slab_members = self._build_pairs(self.skin)
         self.hist = carry_history(*old, self.row_start, self.partner)
-        contacts_first(st.position, st.radius, self.row_start, self.partner, self.hist)
+        if self.periodic:
+            contacts_first_periodic(st.position, st.radius, self.row_start, self.partner, self.hist, self.period)
+        else:
+            contacts_first(st.position, st.radius, self.row_start, self.partner, self.hist)
         self.ref_pos = st.position.copy()
         self.rebuilds += 1
         self._reach_walls()

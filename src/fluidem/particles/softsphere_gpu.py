@@ -47,6 +47,9 @@ def gpu_refusals(case) -> list[str]:
                    "on the CPU only)")
     if case.inlets or case.outlets:
         out.append("[[inlets]] / [[outlets]] (particles added and removed during a run: the CPU engine only)")
+    for i, w in enumerate(case.walls):
+        if getattr(w, "periodic", None):
+            out.append(f"walls.{i}.periodic = {list(w.periodic)} (periodic sides run on the CPU only)")
     found = set()
 
     def visit(node, path):  # every contact law of the case: the default, the wall law, the override tables

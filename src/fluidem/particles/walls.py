@@ -1,7 +1,8 @@
 """Walls as planes: each plane has a reference point, an inward unit normal and a motion.
 
 A box wall becomes its axis-aligned planes (four in 2D, six in 3D, one fewer with
-``open_top``), named ``<box>.xmin`` … ``<box>.zmax``. Motion is a constant velocity
+``open_top``), named ``<box>.xmin`` … ``<box>.zmax``; an axis in the box's ``periodic`` list has no planes:
+its two sides are joined instead (``WallSet.period``). Motion is a constant velocity
 or a sinusoidal oscillation; kernels evaluate it from the time (``wall_state``).
 """
 from __future__ import annotations
@@ -26,6 +27,9 @@ class WallSet:
     planes: list[WallPlane] = field(default_factory=list)
     box_lower: np.ndarray | None = None
     box_upper: np.ndarray | None = None
+    # the length [m] of the box along each periodic axis, 0 along the others (no periodic side: all 0)
+    period: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    period_lower: np.ndarray = field(default_factory=lambda: np.zeros(3))  # that box's lower corner [m]
 
     @property
     def names(self) -> list[str]:
@@ -77,6 +81,10 @@ def build_walls(case) -> WallSet:
         up_axis = int(np.argmax(np.abs(g))) if np.any(g) else None
         for d, ax in enumerate("xyz"):
             if dim2 and d == 2:
+                continue
+            if ax in wall.periodic:  # a periodic pair of sides, not two walls
+                ws.period[d] = hi[d] - lo[d]
+                ws.period_lower[d] = lo[d]
                 continue
             for side, point, sign in (("min", lo, 1.0), ("max", hi, -1.0)):
                 if wall.open_top and d == up_axis and (sign < 0) == (g[d] < 0):

@@ -17,7 +17,8 @@ For each run it prints the measures of test_hoomans1996.py (gas snapshots every 
 4-connected region of ≥ 3 cells of ε > 0.8 apart from the freeboard; slugs, a chord of 0.8 of the width;
 the largest bubble), the probe rows (every 1 ms) with a bubble and the largest in 0.3-0.5 s and from T0,
 the mean particle height over T0 − 0.2 s to T0 and from T0, and the gauge pressure 20 cm up from T0
-(standard deviation, peak-to-peak).
+(standard deviation, peak-to-peak), and whether the first bubble from T0 sits on the orifice (the
+central column's lowest two rows, as test_hoomans1996.py) and when the first slug comes.
 """
 import sys
 from pathlib import Path
@@ -48,11 +49,19 @@ def measure(run: str) -> str:
         return f"{int((pa[m] > 0).sum())}/{int(m.sum())}, {pa[m].max() * 1e4:.0f} cm2"
 
     before = (pt >= T0 - 0.2 - 1e-9) & (pt < T0 - 1e-9)
+    first = ""
+    onset = np.flatnonzero(late & (area > 0))
+    if onset.size:  # the first bubble from T0: does it sit on the orifice (the central column, lowest two rows)?
+        mask = F.bubble_regions(grid, eps[onset[0]])[0]
+        on = bool(mask[grid.nx // 2, :2].any())
+        slugs = np.flatnonzero(late & slug)
+        first = (f"; first bubble at T0{t[onset[0]] - T0:+.2f} s, {'on' if on else 'not on'} the orifice"
+                 + (f", first slug at T0{t[slugs[0]] - T0:+.2f} s" if slugs.size else ""))
     return (f"{out.name}: mean height T0-0.2..T0 {h[before].mean() * 1e3:.1f} mm, from T0 "
             f"{h[pt >= T0 - 1e-9].mean() * 1e3:.1f} mm; probe rows with a bubble 0.3-0.5 s {rows(0.3, T0)}, "
             f"from T0 {rows(T0, pt[-1])}; snapshots from T0 with a bubble {int((area[late] > 0).sum())}, a slug "
             f"{int(slug[late].sum())} (of {int(late.sum())}), largest {area[late].max() * 1e4:.0f} cm2; "
-            f"p20 gauge from T0: std {p20.std():.0f} Pa, peak-to-peak {np.ptp(p20):.0f} Pa")
+            f"p20 gauge from T0: std {p20.std():.0f} Pa, peak-to-peak {np.ptp(p20):.0f} Pa{first}")
 
 
 if __name__ == "__main__":

@@ -66,6 +66,10 @@ Ergun/Wen-Yu + −V_p∇p instead ("particle" exchange; one run): orifice non-id
 in 82 snapshots, ideal 198 cm2 with slugs at T0+0.38-0.52 s, pressure std 2216 vs 369 Pa; slug case ideal
 slugs in 31 snapshots, bubbles up to 274 cm2; Tsuji's jet bubbles in 90 snapshots, up to 120 cm2. The ideal
 beds bubble far less with Hoomans' own model; the non-ideal beds' pressure swings are a third.
+With the background at the model's own u_mf instead (2.5 m/s interstitial, 1.0 m/s superficial; three runs
+each, ``hoomans_background.py``): non-ideal, no bubble before T0, a bubble on the orifice at T0+0.04 s and
+slugs from T0+0.25-0.28 s, up to 266-282 cm2; ideal, a three-cell bubble in 2 snapshots of one run, none in
+the other two; pressure std 467 vs 106 Pa. The orifice xfails below are the model's u_mf, not the jet.
 Disagreements with the paper are strict xfails with these numbers in their reasons; they
 turn into failures the day the model agrees, so the notes are revisited.
 Each run of 1.5 s takes 45-140 s on one core of the 2-core machine (the non-ideal orifice runs the

@@ -27,13 +27,21 @@ pressure force than the particles' −V_p∇p gain near the inflow. Held at 0.3 
 tests/validation/umf_budget.py 1.0 particle 0.3 --wide``, 0.35-0.65 s): Δp / (W/A) 0.968, gas force on
 the particles 0.968 m g, the same given up by the gas, bottom wall 0.028 m g.
 
-The bed's walls raise u_mf: Wen & Yu's correlation is for beds whose walls do not matter,
-and the loosely packed layers along the walls let gas by. Same sweep with the boundary faces exchanged
-and the pressure force unpaired, same particles per unit bed area (``_helpers.umf_sweep.sweep_case`` with
-other n, width, depth):
-  20 d wide, 5 d deep, 2000 spheres:   u_mf 0.233 m/s (+24 %), plateau −3.8 %
-  60 d wide, 5 d deep, 6000 spheres:   u_mf 0.222 m/s (+18 %), plateau −2.7 %
-  60 d wide, 10 d deep, 12000 spheres: u_mf 0.202 m/s (+7.3 %), plateau −4.6 %  (this test)
+The excess over Wen & Yu is not the walls' (test_umf_walls.py, ``umf_walls.py``): with no friction
+they carry no weight, and the layer of half a diameter at a wall (voidage 0.47-0.52, the caps of the
+spheres that touch it) is followed by the densest slab of the bed, so the cross-section's mean voidage is
+the core's within 0.005. Two things set it. The gas force of the top rows: with cells 4 d tall the bed
+(17 d) fills 4.3 rows, the partly filled top row takes its mean voidage and the particles there
+interpolate towards the empty row above, so the top five diameters carry 0.15-0.88 of Ergun's force; the
+fixed bed's pressure drop is 0.79-0.83 of Ergun's at the bed's mean voidage and u_mf 1.19-1.25 times
+Ergun's in every bed below (1.10 with rows of 2 d, 1.07 with rows of 1 d). And the packing: beds 5 d
+deep settle at ε̄ 0.385-0.388 (Ergun's u_mf 0.189-0.195 m/s, about Wen & Yu's), beds 10 d deep at
+0.371-0.377 (0.168-0.176 m/s). Same sweep, the defaults (``umf_walls.py --width W --depth L``), same
+particles per unit bed area:
+  20 d wide, 5 d deep, 2000 spheres:   u_mf 0.2370 m/s (+25.7 %), plateau −3.6 %, ε̄ 0.3874
+  40 d wide, 5 d deep, 4000 spheres:   u_mf 0.2285 m/s (+21.2 %), plateau −2.4 %, ε̄ 0.3851
+  20 d wide, 10 d deep, 4000 spheres:  u_mf 0.2104 m/s (+11.6 %), plateau −4.1 %, ε̄ 0.3772
+  60 d wide, 10 d deep, 12000 spheres: u_mf 0.2022 m/s (+7.3 %), plateau −2.9 %, ε̄ 0.3714  (this test)
 (Ergun's u_mf for these spheres: 0.196 m/s at ε = 0.39, 0.213 at 0.40, 0.249 at 0.42.)
 """
 import math

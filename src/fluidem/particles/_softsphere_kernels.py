@@ -22,6 +22,7 @@ from ._pair_kernels import chunk_run, make_work
 from ._neighbours_kernels import build_pairs, carry_history, cell_order, contacts_first, renumber_pairs
 from .contact._dispatch import contact_force, contact_force_full
 from .contact.base import N_SLOTS, SLOT_EXTENDED, SLOT_ROLLING_FRICTION
+from ._shape_kernels import shape_forces
 
 U = np.uintp  # unsigned array index: no wrap-around code (module docstring)
 assert N_SLOTS == 12, "_law reads the first 8 slots of a packed contact row, _law_full all 12"
@@ -706,14 +707,17 @@ def reorder(pos, vel, omega, force, torque, radius, mass, inertia, inv_mass, inv
 @njit(cache=True, error_model="numpy")
 def compute_forces(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, wall_point0, wall_normal,
                    wall_hist, gravity, ext_force, ext_damping, dim2, row_start, partner, hist, slab_start, slab_members,
-                   t, dt, update, force, torque, nthreads):
-    """Forces and torques at the current state (no integration; history updated only if ``update``)."""
+                   t, dt, update, force, torque, nthreads, shapes):
+    """Forces and torques at the current state (no integration; history updated only if ``update``).
+    ``shapes``: the wall shapes' arrays (``shapes.ShapeSet.kernel_arrays``; their near lists made anew)."""
     sum_f = np.zeros_like(force)
     sum_c = np.zeros_like(force)
     block = thread_blocks(row_start, slab_start, slab_members, nthreads)
     flat = dim2 and is_flat(pos, vel, omega, hist)
     pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
                 dt, update, sum_f, sum_c, block, flat, make_work(pp, row_start, hist, slab_start, slab_members, nthreads))
+    shape_forces(shapes, pos, pos, vel, omega, radius, mass, species, species, True, -1, t, dt, update, flat, sum_f,
+                 sum_c)
     near_count, near_wall = all_walls(pos.shape[0], wall_normal.shape[0])
     # has_ext and mode as run-time values, as advance passes them: a constant argument is a literal type to
     # Numba, which would compile gather_forces once more for it (and with it all it calls)
@@ -729,7 +733,7 @@ def compute_forces(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, 
 def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia, species, pp, pw,
             wall_motion, wall_point0, wall_normal, wall_hist, gravity, ext_force, ext_damping, dim2,
             row_start, partner, hist, slab_start, slab_members, ref_pos, skin, step0, dt, nsteps, nthreads,
-            inertia, ids, reorder_interval, last_reorder, wall_touch, near_count, near_wall):
+            inertia, ids, reorder_interval, last_reorder, wall_touch, near_count, near_wall, shapes):
     """Run ``nsteps`` velocity-Verlet DEM steps from step ``step0`` (time step0 * dt).
 
     Order of one step::
@@ -754,6 +758,8 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
     order[k]; empty if none).
     ``wall_touch``, ``near_count``, ``near_wall``: the walls within reach (``near_walls``), made anew at each
     rebuild; the caller keeps them between calls (made at set-up and after a restore).
+    ``shapes``: the wall shapes' arrays (``shapes.ShapeSet.kernel_arrays``), their forces added once a step
+    (``_shape_kernels.shape_forces``; nothing without shapes).
     """
     limit2 = (0.5 * skin) ** 2
     update = nsteps > 0  # a run-time True, as compute_forces passes it (a literal would compile pair_forces twice)
@@ -792,6 +798,8 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
             rebuilds += 1
         pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
                     dt, update, sum_f, sum_c, block, flat, work)
+        shape_forces(shapes, pos, ref_pos, vel, omega, radius, mass, species, ids, moved > 0, last_reorder, t, dt, update,
+                     flat, sum_f, sum_c)
         mode = 2 if s < nsteps - 1 else 1
         moved = gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
                               wall_axis, wall_hist, wall_touch, near_count, near_wall, gravity, ext_force, ext_damping,

@@ -47,6 +47,11 @@ def gpu_refusals(case) -> list[str]:
                    "on the CPU only)")
     if case.gas is not None:
         out.append("a [gas] section (the gas-particle coupling runs on the CPU only)")
+    from .shapes import refusal
+
+    shapes = refusal(case)
+    if shapes:
+        out.append(shapes)
     found = set()
 
     def visit(node, path):  # every contact law of the case: the default, the wall law, the override tables

@@ -158,6 +158,13 @@ class ShapeSet:
                 getattr(self, k)[...] = arrays[key]
         self.info[S.INFO_FORCE_REBUILD] = 1  # near lists are derived: made anew from the restored positions
 
+    def displacement(self, k: int, t: float) -> tuple[np.ndarray, float]:
+        """Shape k's displacement d(t) (3,) [m] and rotation angle ω t [rad] (0 unless it rotates)."""
+        P = np.empty((len(self.shapes), S.POSE_COLS))
+        S.pose(self.motion, t, P)
+        angle = self.motion[k, 12] * t if int(self.motion[k, 0]) == S.ROTATION else 0.0
+        return P[k, 0:3].copy(), angle
+
     def world_triangles(self, t: float) -> np.ndarray:
         """(T, 3, 3) corners of every triangle and segment (a degenerate triangle) at time t, for output; a
         cylinder is drawn as 32 quads of two triangles."""

@@ -198,3 +198,66 @@ def test_shapes_need_soft_spheres_and_the_cpu():
         validate_case(_case([QUAD], model="hard_sphere"))
     refusals = gpu_refusals(validate_case(_case([QUAD])))
     assert any("walls.0 ('q') kind = 'polygon'" in r for r in refusals)
+
+
+def _flat_grid(n, size=1.0):
+    """A square [0, size]² at z = 0 split into n × n squares of two triangles each: (E, 9) geometry."""
+    s = np.linspace(0.0, size, n + 1)
+    tris = []
+    for i in range(n):
+        for j in range(n):
+            q0, q1, q2, q3 = ((s[i], s[j], 0), (s[i + 1], s[j], 0), (s[i + 1], s[j + 1], 0), (s[i], s[j + 1], 0))
+            tris += [q0 + q1 + q2, q0 + q2 + q3]
+    return np.array(tris, float)
+
+
+def test_a_sphere_on_a_finely_meshed_plane_has_the_plane_contact_only():
+    """Anywhere over a plane of 200 triangles (on faces, edges, vertices, diagonals), a sphere touching it
+    has exactly one contact, with the plane's normal and overlap: no edge contact of a neighbour."""
+    geom = _flat_grid(10, 0.01)  # squares of 1 mm, sphere radius 2 mm: up to ~30 triangles within reach
+    ne = len(geom)
+    kind = np.full(ne, S.TRIANGLE, np.int64)
+    owner = np.zeros(ne, np.int64)
+    P = np.zeros((1, S.POSE_COLS))
+    P[0, 3] = P[0, 7] = P[0, 11] = 1.0
+    rng = np.random.default_rng(11)
+    pos = np.column_stack([rng.uniform(0.003, 0.007, 400), rng.uniform(0.003, 0.007, 400),
+                           rng.uniform(0.0015, 0.00199, 400)])
+    pos[:50, :2] = np.round(pos[:50, :2], 3)  # on vertices
+    pos[50:100, 0] = np.round(pos[50:100, 0], 3)  # on edges
+    pos[100:150, 1] = pos[100:150, 0] - np.floor(pos[100:150, 0] * 1e3) * 1e-3 + np.floor(pos[100:150, 1] * 1e3) * 1e-3
+    radius = np.full(len(pos), 0.002)
+    near_count = np.full(len(pos), ne, np.int64)
+    near_elem = np.tile(np.arange(ne), (len(pos), 1))
+    cand_e = np.empty(S.MAX_CANDIDATES, np.int64)
+    cand_f = np.empty((S.MAX_CANDIDATES, 8))
+    for i in range(len(pos)):
+        m = S.particle_contacts(i, pos, radius, kind, owner, geom, P, near_count, near_elem, cand_e, cand_f)
+        assert m == 1, (i, pos[i], cand_e[:m], cand_f[:m])
+        assert np.allclose(cand_f[0, 3:6], (0.0, 0.0, 1.0), atol=1e-12)
+        assert cand_f[0, 6] == pytest.approx(0.002 - pos[i, 2], rel=1e-9)
+
+
+def test_a_sphere_beyond_a_convex_edge_or_vertex_has_one_contact():
+    """A box corner from outside: two faces meet at an edge, three at a vertex; a sphere beyond them touches
+    the edge (vertex) once, along the direction from that point to its centre."""
+    # the corner of the unit cube at the origin, the three faces as two triangles each, seen from outside
+    faces = [((0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)), ((0, 0, 0), (0, 1, 0), (0, 1, 1), (0, 0, 1)),
+             ((0, 0, 0), (0, 0, 1), (1, 0, 1), (1, 0, 0))]
+    geom = np.array([a + b + c for f in faces for a, b, c in ((f[0], f[1], f[2]), (f[0], f[2], f[3]))], float)
+    kind = np.full(len(geom), S.TRIANGLE, np.int64)
+    owner = np.zeros(len(geom), np.int64)
+    P = np.zeros((1, S.POSE_COLS))
+    P[0, 3] = P[0, 7] = P[0, 11] = 1.0
+    near_count = np.array([len(geom)], np.int64)
+    near_elem = np.arange(len(geom)).reshape(1, -1)
+    cand_e = np.empty(S.MAX_CANDIDATES, np.int64)
+    cand_f = np.empty((S.MAX_CANDIDATES, 8))
+    for pos, point in (([-0.1, -0.1, -0.1], (0, 0, 0)), ([0.5, -0.1, -0.1], (0.5, 0, 0))):
+        pos = np.array([pos])
+        m = S.particle_contacts(0, pos, np.array([0.2]), kind, owner, geom, P, near_count, near_elem, cand_e,
+                                cand_f)
+        assert m == 1
+        assert np.allclose(cand_f[0, :3], point, atol=1e-12)
+        d = np.linalg.norm(pos[0] - point)
+        assert cand_f[0, 6] == pytest.approx(0.2 - d, rel=1e-12)

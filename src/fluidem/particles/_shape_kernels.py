@@ -385,10 +385,13 @@ def particle_contacts(i, pos, radius, kind, owner, geom, P, near_count, near_ele
     overlap 6, feature 7).
 
     A sphere on an edge or vertex shared by several elements finds the same closest point on each; as
-    LIGGGHTS mesh walls do, contacts are taken face first, then edges, then vertices (nearest first within
-    each), and an edge or vertex contact is dropped when its point lies on an element already in contact
-    (within 1e-9 of the radius): the two triangles of a flat square give one contact on their shared edge,
-    and a face contact hides the edge contacts of its neighbours in the same plane."""
+    LIGGGHTS mesh walls do, contacts are taken face first, then edges, then vertices (deepest first within
+    each), and an edge or vertex contact is dropped when its point q lies (within 1e-9 of the radius) on
+    another touching element that is nearer (q is not that element's closest point: the sphere faces the
+    element's interior, not q's edge) or already taken (the same point found again). The two triangles of a
+    flat square give one contact on their shared edge, and on a finely meshed plane a sphere near a vertex
+    feels the plane's one contact, not those of the edges around it; a sphere beyond a convex edge or
+    vertex, which is every touching element's closest point, feels it once."""
     a = radius[i]
     m = 0
     tmp = np.empty(8)
@@ -427,22 +430,32 @@ def particle_contacts(i, pos, radius, kind, owner, geom, P, near_count, near_ele
             j -= 1
         cand_e[j] = e
         cand_f[j, :] = tmp
-    # drop edge and vertex contacts lying on an element already taken
+    # an edge or vertex contact at q is dropped where q lies on another touching element that either is
+    # nearer (q is then not that element's closest point: the sphere faces its interior, not the edge) or
+    # has been taken already (the same point found twice)
     tol = 1e-9 * a
+    keep = np.zeros(m, dtype=np.bool_)
+    for c in range(m):
+        keep[c] = True
+        if cand_f[c, 7] == FACE:
+            continue
+        for j in range(m):
+            if j == c:
+                continue
+            if not (cand_f[j, 6] > cand_f[c, 6] + tol or (j < c and keep[j])):
+                continue
+            e = cand_e[j]
+            k = owner[e]
+            bx, by, bz = to_body(P, k, cand_f[c, 0], cand_f[c, 1], cand_f[c, 2])
+            if element_distance(kind[e], bx, by, bz, geom, e) <= tol:
+                keep[c] = False
+                break
     kept = 0
     for c in range(m):
-        keep = True
-        if cand_f[c, 7] != FACE:
-            for j in range(kept):
-                e = cand_e[j]
-                k = owner[e]
-                bx, by, bz = to_body(P, k, cand_f[c, 0], cand_f[c, 1], cand_f[c, 2])
-                if element_distance(kind[e], bx, by, bz, geom, e) <= tol:
-                    keep = False
-                    break
-        if keep:
+        if keep[c]:
             cand_e[kept] = cand_e[c]
-            cand_f[kept, :] = cand_f[c, :]
+            for col in range(8):
+                cand_f[kept, col] = cand_f[c, col]
             kept += 1
     return kept
 

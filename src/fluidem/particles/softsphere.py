@@ -62,6 +62,8 @@ class SoftSphereEngine(ParticleEngine):
         self.shapes.setup(self)
         self.reorder_listeners = []  # callables f(order) told of each renumbering (new k is former order[k])
         self._compute_forces(update=False)
+        if self.shapes.after_advance():  # a near list overflowed: wider lists, the first forces again
+            self._compute_forces(update=False)
 
     # ------------------------------------------------------------ set-up
     def _contact_tables(self):

@@ -231,8 +231,9 @@ def test_a_sphere_on_a_finely_meshed_plane_has_the_plane_contact_only():
     near_elem = np.tile(np.arange(ne), (len(pos), 1))
     cand_e = np.empty(S.MAX_CANDIDATES, np.int64)
     cand_f = np.empty((S.MAX_CANDIDATES, 8))
+    keep = np.empty(S.MAX_CANDIDATES, np.bool_)
     for i in range(len(pos)):
-        m = S.particle_contacts(i, pos, radius, kind, owner, geom, P, near_count, near_elem, cand_e, cand_f)
+        m = S.particle_contacts(i, pos, radius, kind, owner, geom, P, near_count, near_elem, cand_e, cand_f, keep)
         assert m == 1, (i, pos[i], cand_e[:m], cand_f[:m])
         assert np.allclose(cand_f[0, 3:6], (0.0, 0.0, 1.0), atol=1e-12)
         assert cand_f[0, 6] == pytest.approx(0.002 - pos[i, 2], rel=1e-9)
@@ -253,10 +254,11 @@ def test_a_sphere_beyond_a_convex_edge_or_vertex_has_one_contact():
     near_elem = np.arange(len(geom)).reshape(1, -1)
     cand_e = np.empty(S.MAX_CANDIDATES, np.int64)
     cand_f = np.empty((S.MAX_CANDIDATES, 8))
+    keep = np.empty(S.MAX_CANDIDATES, np.bool_)
     for pos, point in (([-0.1, -0.1, -0.1], (0, 0, 0)), ([0.5, -0.1, -0.1], (0.5, 0, 0))):
         pos = np.array([pos])
         m = S.particle_contacts(0, pos, np.array([0.2]), kind, owner, geom, P, near_count, near_elem, cand_e,
-                                cand_f)
+                                cand_f, keep)
         assert m == 1
         assert np.allclose(cand_f[0, :3], point, atol=1e-12)
         d = np.linalg.norm(pos[0] - point)

@@ -257,6 +257,11 @@ def rotate(P, k, x, y, z):
 def moved_since(motion, reach, t0, t):
     """Upper bound over the shapes of how far a point of a shape moved between t0 and t [m]: |d(t) − d(t0)|
     plus |ω| |t − t0| times the shape's largest distance from its rotation axis point (``reach``)."""
+    moving = False
+    for k in range(motion.shape[0]):
+        moving |= int(motion[k, 0]) != STATIC
+    if not moving:
+        return 0.0
     p0 = np.empty((motion.shape[0], POSE_COLS))
     p1 = np.empty((motion.shape[0], POSE_COLS))
     pose(motion, t0, p0)
@@ -379,10 +384,10 @@ def _law_row(table, a, b):
 
 
 @njit(cache=True, error_model="numpy")
-def particle_contacts(i, pos, radius, kind, owner, geom, P, near_count, near_elem, cand_e, cand_f):
+def particle_contacts(i, pos, radius, kind, owner, geom, P, near_count, near_elem, cand_e, cand_f, keep):
     """The contacts of particle i with its near elements, each feature once: returns m and fills cand_e[:m]
     (element ids) and cand_f[:m, :] (world closest point 0:3, world unit normal toward the particle 3:6,
-    overlap 6, feature 7).
+    overlap 6, feature 7); ``keep`` (MAX_CANDIDATES,) bool is work space.
 
     A sphere on an edge or vertex shared by several elements finds the same closest point on each; as
     LIGGGHTS mesh walls do, contacts are taken face first, then edges, then vertices (deepest first within
@@ -394,7 +399,6 @@ def particle_contacts(i, pos, radius, kind, owner, geom, P, near_count, near_ele
     vertex, which is every touching element's closest point, feels it once."""
     a = radius[i]
     m = 0
-    tmp = np.empty(8)
     for q in range(near_count[i]):
         e = near_elem[i, q]
         k = owner[e]
@@ -406,14 +410,6 @@ def particle_contacts(i, pos, radius, kind, owner, geom, P, near_count, near_ele
             continue
         wx, wy, wz = to_world(P, k, qx, qy, qz)
         nx, ny, nz = rotate(P, k, nx, ny, nz)
-        tmp[0] = wx
-        tmp[1] = wy
-        tmp[2] = wz
-        tmp[3] = nx
-        tmp[4] = ny
-        tmp[5] = nz
-        tmp[6] = overlap
-        tmp[7] = feat
         # insertion by (feature, −overlap): faces first, deeper first; the MAX_CANDIDATES first kept
         cap = cand_e.shape[0]
         if m < cap:
@@ -429,12 +425,18 @@ def particle_contacts(i, pos, radius, kind, owner, geom, P, near_count, near_ele
                 cand_f[j, col] = cand_f[j - 1, col]
             j -= 1
         cand_e[j] = e
-        cand_f[j, :] = tmp
+        cand_f[j, 0] = wx
+        cand_f[j, 1] = wy
+        cand_f[j, 2] = wz
+        cand_f[j, 3] = nx
+        cand_f[j, 4] = ny
+        cand_f[j, 5] = nz
+        cand_f[j, 6] = overlap
+        cand_f[j, 7] = feat
     # an edge or vertex contact at q is dropped where q lies on another touching element that either is
     # nearer (q is then not that element's closest point: the sphere faces its interior, not the edge) or
     # has been taken already (the same point found twice)
     tol = 1e-9 * a
-    keep = np.zeros(m, dtype=np.bool_)
     for c in range(m):
         keep[c] = True
         if cand_f[c, 7] == FACE:
@@ -515,17 +517,19 @@ def shape_forces(shapes, pos, ref_pos, vel, omega, radius, mass, species, ids, r
     cand_f = np.empty((MAX_CANDIDATES, 8))
     H = slot_elem.shape[1]
     used = np.zeros(H, dtype=np.bool_)
+    keep = np.zeros(MAX_CANDIDATES, dtype=np.bool_)
+    slot_of = np.empty(MAX_CANDIDATES, dtype=np.int64)
     for q in range(info[INFO_ACTIVE]):
         i = active[q]
-        m = particle_contacts(i, pos, radius, kind, owner, geom, P, near_count, near_elem, cand_e, cand_f)
+        m = particle_contacts(i, pos, radius, kind, owner, geom, P, near_count, near_elem, cand_e, cand_f, keep)
         if m == 0 and not update:
             continue
         a = radius[i]
         for h in range(H):
             used[h] = False
         # contacts that go on keep their slots
-        slot_of = np.full(MAX_CANDIDATES, -1, dtype=np.int64)
         for c in range(m):
+            slot_of[c] = -1
             for h in range(H):
                 if slot_elem[i, h] == cand_e[c]:
                     slot_of[c] = h

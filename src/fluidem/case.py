@@ -121,8 +121,9 @@ class Motion(Strict):
     """Prescribed wall motion: constant velocity, sinusoidal oscillation x = A sin(2π f t + φ), or (wall
     shapes only) rotation at a constant rate about an axis."""
 
-    kind: Literal["constant_velocity", "oscillation", "rotation"] = Field(
-        description="kind of motion; 'rotation' moves the shapes (polyline, polygon, cylinder, mesh) only")
+    kind: Literal["constant_velocity", "oscillation", "rotation", "table"] = Field(
+        description="kind of motion; 'rotation' and 'table' (poses read from a CSV file) move the shapes "
+        "(polyline, polygon, cylinder, mesh) only")
     velocity: Vec3 | None = Field(None, description="[m/s] for constant_velocity")
     amplitude: Vec3 | None = Field(None, description="[m] displacement amplitude vector for oscillation")
     frequency: float | None = Field(None, gt=0.0, description="[Hz] for oscillation")
@@ -132,6 +133,9 @@ class Motion(Strict):
                                                 "in 2D along z)")
     angular_velocity: float | None = Field(None, description="[rad/s] rotation rate, right-handed about axis "
                                                              "(rotation)")
+    file: str | None = Field(None, description="table: CSV file with columns t [s], dx, dy, dz [m] (displacement) "
+                                               "and angle [rad] (about axis through axis_point), interpolated "
+                                               "linearly in t; a relative path is taken from the working directory")
 
     @model_validator(mode="after")
     def _check(self):
@@ -143,6 +147,11 @@ class Motion(Strict):
             if self.axis_point is None or self.axis is None or self.angular_velocity is None:
                 raise ValueError("motion kind 'rotation' needs axis_point, axis and angular_velocity")
             if math.hypot(*self.axis) == 0:
+                raise ValueError(f"motion.axis = {list(self.axis)}: the rotation axis must not be zero")
+        if self.kind == "table":
+            if not self.file:
+                raise ValueError("motion kind 'table' needs file (a CSV of t, dx, dy, dz, angle)")
+            if self.axis is not None and math.hypot(*self.axis) == 0:
                 raise ValueError(f"motion.axis = {list(self.axis)}: the rotation axis must not be zero")
         return self
 
@@ -217,8 +226,8 @@ class Wall(Strict):
         elif self.kind == "mesh":
             if not self.file:
                 raise ValueError(f"mesh wall {self.name!r} needs file (an STL file)")
-        if self.motion is not None and self.motion.kind == "rotation" and self.kind in ("plane", "box"):
-            raise ValueError(f"{self.kind} wall {self.name!r}: motion.kind = 'rotation' moves shapes only "
+        if self.motion is not None and self.motion.kind in ("rotation", "table") and self.kind in ("plane", "box"):
+            raise ValueError(f"{self.kind} wall {self.name!r}: motion.kind = {self.motion.kind!r} moves shapes only "
                              f"(kind one of {list(SHAPE_KINDS)}); a plane or box moves by constant_velocity or "
                              "oscillation")
         return self

@@ -263,3 +263,39 @@ def test_a_sphere_beyond_a_convex_edge_or_vertex_has_one_contact():
         assert np.allclose(cand_f[0, :3], point, atol=1e-12)
         d = np.linalg.norm(pos[0] - point)
         assert cand_f[0, 6] == pytest.approx(0.2 - d, rel=1e-12)
+
+
+def test_table_pose_is_interpolated_linearly_and_held_at_the_ends():
+    rows = np.array([[0.0, 0.0, 0.0, 0.0, 0.0], [1.0, 0.1, 0.0, -0.2, 0.5], [3.0, 0.3, 0.2, -0.2, -0.5]])
+    motion = np.zeros((1, S.MOTION_COLS + rows.size))
+    motion[0, 0] = S.TABLE
+    motion[0, 9:12] = (0.0, 0.0, 1.0)
+    motion[0, 13] = len(rows)
+    motion[0, S.MOTION_COLS:] = rows.ravel()
+    P = np.empty((1, S.POSE_COLS))
+    S.pose(motion, 2.0, P)  # half-way between rows 1 and 2
+    assert P[0, 0:3] == pytest.approx([0.2, 0.1, -0.2], abs=1e-15)
+    assert P[0, 12:15] == pytest.approx([0.1, 0.1, 0.0], abs=1e-15)  # (row 2 − row 1) / 2 s
+    assert P[0, 21] == pytest.approx(0.0, abs=1e-15)
+    assert P[0, 15:18] == pytest.approx([0.0, 0.0, -0.5], abs=1e-15)  # dθ/dt about z
+    S.pose(motion, 0.25, P)
+    assert np.allclose(P[0, 3:12].reshape(3, 3), Rotation.from_rotvec([0, 0, 0.125]).as_matrix(), atol=1e-15)
+    S.pose(motion, 5.0, P)  # after the last row: held there, at rest
+    assert P[0, 0:3] == pytest.approx([0.3, 0.2, -0.2], abs=1e-15)
+    assert np.all(P[0, 12:18] == 0.0)
+    S.pose(motion, -1.0, P)
+    assert np.all(P[0, 0:3] == 0.0) and np.all(P[0, 12:18] == 0.0)
+
+
+def test_table_file_errors_name_the_key(tmp_path):
+    bad = tmp_path / "poses.csv"
+    bad.write_text("t,dx,dy,dz,angle\n0,0,0,0,0\n1,0,0,0.1,0\n0.5,0,0,0.2,0\n")
+    wall = {**QUAD, "motion": {"kind": "table", "file": str(bad)}}
+    with pytest.raises(CaseError, match=r"walls.0 \('q'\).motion.file = .*t must increase.*row 3"):
+        build_shapes(validate_case(_case([wall])))
+    bad.write_text("t,dx,dy,dz\n0,0,0,0\n")
+    with pytest.raises(CaseError, match="no column angle"):
+        build_shapes(validate_case(_case([wall])))
+    bad.write_text("t,dx,dy,dz,angle\n0,0,0,0,0\n1,0,0,0,0.3\n")
+    with pytest.raises(CaseError, match="needs axis_point and axis"):
+        build_shapes(validate_case(_case([wall])))

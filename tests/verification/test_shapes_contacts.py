@@ -168,3 +168,24 @@ def test_2d_hopper_of_segments_discharges(make_engine, contact_law):
     assert below[0] < len(pos)  # it takes time to flow out
     assert below[-1] == len(pos)  # and it empties
     assert np.all(np.diff(below) >= 0)
+
+
+def test_a_table_of_poses_moves_a_drum_as_its_rotation_does(make_engine, contact_law, tmp_path):
+    """The drum turned by a table of angles θ = ω t (two rows, linear in between) carries the sphere as the
+    rotation motion does, to round-off."""
+    R, w = 0.05, 2.0
+    law = _law(contact_law, friction=0.5)
+    table = tmp_path / "poses.csv"
+    table.write_text(f"t,dx,dy,dz,angle\n0,0,0,0,0\n10,0,0,0,{10 * w!r}\n")
+    runs = []
+    for motion in ({"kind": "rotation", "axis_point": [0, 0, 0], "axis": [0, 1, 0], "angular_velocity": w},
+                   {"kind": "table", "file": str(table), "axis_point": [0, 0, 0], "axis": [0, 1, 0]}):
+        drum = {"name": "drum", "kind": "cylinder", "point": [0.0, -0.01, 0.0], "axis": [0, 1, 0], "radius": R,
+                "length": 0.02, "motion": motion}
+        eng = make_engine((0.0, 0.0, -(R - D / 2)), D, (0, 0, 0), contact=law, walls=[drum], gravity=(0, 0, -G))
+        eng.advance(int(0.1 / eng.dt))
+        runs.append(eng)
+    a, b = runs
+    assert np.abs(a.state.velocity - b.state.velocity).max() < 1e-9
+    assert np.abs(a.state.omega - b.state.omega).max() < 1e-7
+    assert np.linalg.norm(a.state.velocity) > 1e-3  # it moved

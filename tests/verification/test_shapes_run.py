@@ -94,3 +94,23 @@ def test_history_follows_renumbered_particles():
             h = list(sh.slot_elem[i]).index(0)
             assert np.any(sh.slot_hist[i, h] != 0.0)
     assert math.isfinite(float(st.position.sum()))
+
+
+def test_a_particle_placed_across_a_shape_is_refused(tmp_path):
+    from fluidem.errors import CaseError
+    from fluidem.simulation import Simulation
+
+    path = tmp_path / "p.csv"
+    path.write_text("x,y,z,diameter\n0.0,0.0,0.001,0.004\n0.01,0.0,0.01,0.004\n")
+    case = validate_case({
+        "gravity": [0.0, 0.0, -9.81],
+        "particles": {"species": [{"name": "p", "diameter": 4e-3, "density": 2500.0, "count": 2}],
+                      "contact": {"model": "linear_spring_dashpot", "stiffness": 1e3, "restitution": 0.5,
+                                  "friction": 0.3},
+                      "placement": {"method": "file", "file": str(path)}},
+        "walls": [{"name": "floor", "kind": "polygon",
+                   "points": [[-0.05, -0.05, 0], [0.05, -0.05, 0], [0.05, 0.05, 0], [-0.05, 0.05, 0]]}],
+        "time": {"end": 0.01},
+    })
+    with pytest.raises(CaseError, match=r"cross wall floor: 1 particle\(s\), e.g. particle 0 by 0.001 m"):
+        Simulation(case)

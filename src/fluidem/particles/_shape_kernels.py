@@ -23,9 +23,11 @@ TRIANGLE, SEGMENT, CYLINDER = 1, 2, 3
 # feature of a closest point: a face (or a segment's or cylinder's interior), an edge, a vertex
 FACE, EDGE, VERTEX = 0, 1, 2
 # shape motion kinds (shapes.py builds the table; the first three are those of walls.py)
-STATIC, CONSTANT_VELOCITY, OSCILLATING, ROTATION = 0, 1, 2, 3
-# columns of the (S, POSE_COLS) pose table: d (0:3), R row-major (3:12), d' (12:15), ω vector (15:18), c (18:21)
-POSE_COLS = 21
+STATIC, CONSTANT_VELOCITY, OSCILLATING, ROTATION, TABLE = 0, 1, 2, 3, 4
+# columns of the (S, POSE_COLS) pose table: d (0:3), R row-major (3:12), d' (12:15), ω vector (15:18), c (18:21),
+# rotation angle θ (21)
+POSE_COLS = 22
+MOTION_COLS = 16  # motion row before a TABLE's poses (5 numbers each: t, dx, dy, dz, θ)
 MAX_CANDIDATES = 16  # touching elements of one particle considered at one step (more: the nearest are kept)
 # info counters (int64 array): 0 particles with near elements, 1 last reorder step seen, 2 near-list overflows,
 # 3 history-slot overflows, 4 shape-list rebuilds, 5 list capacity K needed at the last rebuild, 6 lists to be made
@@ -176,11 +178,36 @@ def element_distance(kind, px, py, pz, geom, e):
 
 # ---------------------------------------------------------------- motion
 @njit(cache=True, error_model="numpy")
+def _rotate_about(out, k, ux, uy, uz, th, w):
+    """Rodrigues' rotation by θ about the unit axis u into pose row k, R = c I + s [u]x + (1 − c) u uᵀ, and
+    the angular velocity vector w u."""
+    c = math.cos(th)
+    s = math.sin(th)
+    C = 1.0 - c
+    out[k, 3] = c + ux * ux * C
+    out[k, 4] = ux * uy * C - uz * s
+    out[k, 5] = ux * uz * C + uy * s
+    out[k, 6] = uy * ux * C + uz * s
+    out[k, 7] = c + uy * uy * C
+    out[k, 8] = uy * uz * C - ux * s
+    out[k, 9] = uz * ux * C - uy * s
+    out[k, 10] = uz * uy * C + ux * s
+    out[k, 11] = c + uz * uz * C
+    out[k, 15] = w * ux
+    out[k, 16] = w * uy
+    out[k, 17] = w * uz
+    out[k, 21] = th
+
+
+@njit(cache=True, error_model="numpy")
 def pose(motion, t, out):
     """Fill out (S, POSE_COLS) with each shape's pose at time t from its motion row
-    (kind, v or A (1:4), f [Hz] (4), φ (5), c (6:9), unit axis u (9:12), ω [rad/s] (12)):
+    (kind, v or A (1:4), f [Hz] (4), φ (5), c (6:9), unit axis u (9:12), ω [rad/s] (12), poses in the table
+    (13), then the table's rows t, dx, dy, dz, θ from MOTION_COLS on):
     constant velocity d = v t; oscillation d = A sin(2π f t + φ), d' = 2π f A cos(2π f t + φ); rotation
-    R = Rodrigues' rotation by θ = ω t about u through c, surface velocity ω u × (x − c)."""
+    R = Rodrigues' rotation by θ = ω t about u through c, surface velocity ω u × (x − c); table: d and θ
+    interpolated linearly between the rows (velocities constant between them), held before the first
+    and after the last (at rest)."""
     for k in range(motion.shape[0]):
         kind = int(motion[k, 0])
         for j in range(POSE_COLS):
@@ -203,25 +230,35 @@ def pose(motion, t, out):
                 out[k, j] = motion[k, 1 + j] * s
                 out[k, 12 + j] = motion[k, 1 + j] * c
         elif kind == ROTATION:
-            ux, uy, uz = motion[k, 9], motion[k, 10], motion[k, 11]
             w = motion[k, 12]
-            th = w * t
-            c = math.cos(th)
-            s = math.sin(th)
-            C = 1.0 - c
-            # Rodrigues: R = c I + s [u]x + (1 − c) u uᵀ
-            out[k, 3] = c + ux * ux * C
-            out[k, 4] = ux * uy * C - uz * s
-            out[k, 5] = ux * uz * C + uy * s
-            out[k, 6] = uy * ux * C + uz * s
-            out[k, 7] = c + uy * uy * C
-            out[k, 8] = uy * uz * C - ux * s
-            out[k, 9] = uz * ux * C - uy * s
-            out[k, 10] = uz * uy * C + ux * s
-            out[k, 11] = c + uz * uz * C
-            out[k, 15] = w * ux
-            out[k, 16] = w * uy
-            out[k, 17] = w * uz
+            _rotate_about(out, k, motion[k, 9], motion[k, 10], motion[k, 11], w * t, w)
+        elif kind == TABLE:
+            nt = int(motion[k, 13])
+            b = MOTION_COLS
+            last = b + 5 * (nt - 1)
+            if nt == 1 or t <= motion[k, b]:
+                lo, f, rate = b, 0.0, 0.0
+            elif t >= motion[k, last]:
+                lo, f, rate = last - 5, 1.0, 0.0
+            else:  # the row with t_lo <= t < t_lo+1 (bisection)
+                i0, i1 = 0, nt - 1
+                while i1 - i0 > 1:
+                    mid = (i0 + i1) // 2
+                    if motion[k, b + 5 * mid] <= t:
+                        i0 = mid
+                    else:
+                        i1 = mid
+                lo = b + 5 * i0
+                span = motion[k, lo + 5] - motion[k, lo]
+                f = (t - motion[k, lo]) / span
+                rate = 1.0 / span
+            hi = lo + 5 if nt > 1 else lo
+            for j in range(3):
+                out[k, j] = (1.0 - f) * motion[k, lo + 1 + j] + f * motion[k, hi + 1 + j]
+                out[k, 12 + j] = (motion[k, hi + 1 + j] - motion[k, lo + 1 + j]) * rate
+            th = (1.0 - f) * motion[k, lo + 4] + f * motion[k, hi + 4]
+            _rotate_about(out, k, motion[k, 9], motion[k, 10], motion[k, 11], th,
+                          (motion[k, hi + 4] - motion[k, lo + 4]) * rate)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -256,7 +293,7 @@ def rotate(P, k, x, y, z):
 @njit(cache=True, error_model="numpy")
 def moved_since(motion, reach, t0, t):
     """Upper bound over the shapes of how far a point of a shape moved between t0 and t [m]: |d(t) − d(t0)|
-    plus |ω| |t − t0| times the shape's largest distance from its rotation axis point (``reach``)."""
+    plus |θ(t) − θ(t0)| times the shape's largest distance from its rotation axis point (``reach``)."""
     moving = False
     for k in range(motion.shape[0]):
         moving |= int(motion[k, 0]) != STATIC
@@ -271,8 +308,7 @@ def moved_since(motion, reach, t0, t):
         if int(motion[k, 0]) == STATIC:
             continue
         dd = math.sqrt((p1[k, 0] - p0[k, 0]) ** 2 + (p1[k, 1] - p0[k, 1]) ** 2 + (p1[k, 2] - p0[k, 2]) ** 2)
-        if int(motion[k, 0]) == ROTATION:
-            dd += abs(motion[k, 12] * (t - t0)) * reach[k]
+        dd += abs(p1[k, 21] - p0[k, 21]) * reach[k]
         worst = max(worst, dd)
     return worst
 
@@ -636,3 +672,27 @@ def _follow_ids(ids, ids_seen, slot_elem, slot_hist):
         slot_elem[new_rows[r], :] = old_elem[old_rows[r], :]
         slot_hist[new_rows[r], :, :] = old_hist[old_rows[r], :, :]
     ids_seen[:] = ids
+
+
+@njit(cache=True, error_model="numpy")
+def deepest_contacts(shapes, pos, radius, t, overlap, element):
+    """Per particle, the largest overlap with a shape element at time t (0 where none touches) and that
+    element (−1: none), over the near lists of the last ``shape_forces`` call (for the set-up check)."""
+    (kind, owner, geom, motion, reach, grid, dims, cell_start, cell_elems, table, near_count, near_elem, active,
+     info, slot_elem, slot_hist, ids_seen, ref_t, load) = shapes
+    overlap[:] = 0.0
+    element[:] = -1
+    if kind.shape[0] == 0:
+        return
+    P = np.empty((motion.shape[0], POSE_COLS))
+    pose(motion, t, P)
+    cand_e = np.empty(MAX_CANDIDATES, dtype=np.int64)
+    cand_f = np.empty((MAX_CANDIDATES, 8))
+    keep = np.zeros(MAX_CANDIDATES, dtype=np.bool_)
+    for q in range(info[INFO_ACTIVE]):
+        i = active[q]
+        m = particle_contacts(i, pos, radius, kind, owner, geom, P, near_count, near_elem, cand_e, cand_f, keep)
+        for c in range(m):
+            if cand_f[c, 6] > overlap[i]:
+                overlap[i] = cand_f[c, 6]
+                element[i] = cand_e[c]

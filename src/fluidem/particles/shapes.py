@@ -33,6 +33,7 @@ class Shape:
     box: np.ndarray  # (E, 6) float64 element bounding boxes (lo, hi)
     centre: np.ndarray  # (3,) reference point: rotation axis point, else the centroid of the corners
     reach: float  # largest distance of a point of the shape from centre [m]
+    table: np.ndarray | None = None  # (T, 5) poses t, dx, dy, dz, θ of a table motion
 
 
 @dataclass
@@ -58,8 +59,11 @@ class ShapeSet:
         return kind, owner, geom, box
 
     def motion_table(self) -> np.ndarray:
-        """(S, 16) float64: kind, v or A (1:4), f (4), φ (5), centre c (6:9), unit axis (9:12), ω (12)."""
-        out = np.zeros((max(len(self.shapes), 0), 16))
+        """(S, MOTION_COLS + 5 T) float64: kind, v or A (1:4), f (4), φ (5), centre c (6:9), unit axis (9:12),
+        ω (12), table rows (13), then the rows t, dx, dy, dz, θ of a table motion (T: the longest table)."""
+        tables = [s.table for s in self.shapes]
+        longest = max([len(t) for t in tables if t is not None], default=0)
+        out = np.zeros((len(self.shapes), S.MOTION_COLS + 5 * longest))
         for k, s in enumerate(self.shapes):
             m = s.source.motion
             out[k, 6:9] = s.centre
@@ -75,10 +79,15 @@ class ShapeSet:
                 out[k, 4] = m.frequency
                 out[k, 5] = m.phase
             else:
-                out[k, 0] = S.ROTATION
-                axis = np.array(m.axis, float)
-                out[k, 9:12] = axis / np.linalg.norm(axis)
-                out[k, 12] = m.angular_velocity
+                out[k, 0] = S.ROTATION if m.kind == "rotation" else S.TABLE
+                if m.axis is not None:
+                    axis = np.array(m.axis, float)
+                    out[k, 9:12] = axis / np.linalg.norm(axis)
+                if m.kind == "rotation":
+                    out[k, 12] = m.angular_velocity
+                else:
+                    out[k, 13] = len(s.table)
+                    out[k, S.MOTION_COLS:S.MOTION_COLS + s.table.size] = s.table.ravel()
         return out
 
     def contact_table(self, engine):
@@ -159,11 +168,25 @@ class ShapeSet:
         self.info[S.INFO_FORCE_REBUILD] = 1  # near lists are derived: made anew from the restored positions
 
     def displacement(self, k: int, t: float) -> tuple[np.ndarray, float]:
-        """Shape k's displacement d(t) (3,) [m] and rotation angle ω t [rad] (0 unless it rotates)."""
+        """Shape k's displacement d(t) (3,) [m] and rotation angle θ(t) [rad] (0 unless it rotates)."""
         P = np.empty((len(self.shapes), S.POSE_COLS))
         S.pose(self.motion, t, P)
-        angle = self.motion[k, 12] * t if int(self.motion[k, 0]) == S.ROTATION else 0.0
-        return P[k, 0:3].copy(), angle
+        return P[k, 0:3].copy(), float(P[k, 21])
+
+    def check_overlaps(self, state, t: float, tolerance: float) -> None:
+        """CaseError if a particle overlaps a shape at time t by more than ``tolerance`` of its radius."""
+        if not len(self.kind):
+            return
+        overlap = np.zeros(state.n)
+        element = np.zeros(state.n, np.int64)
+        S.deepest_contacts(self.kernel_arrays(), state.position, state.radius, t, overlap, element)
+        bad = np.flatnonzero(overlap > tolerance * state.radius)
+        if bad.size:
+            i = bad[np.argmax(overlap[bad])]
+            raise CaseError(
+                f"particles.placement: initial particles cross wall {self.names[self.owner[element[i]]]}: "
+                f"{bad.size} particle(s), e.g. particle {i} by {overlap[i]:.3g} m; particles must start apart "
+                "from the walls (set particles.placement.region_lower and region_upper inside the shapes)")
 
     def world_triangles(self, t: float) -> np.ndarray:
         """(T, 3, 3) corners of every triangle and segment (a degenerate triangle) at time t, for output; a
@@ -269,13 +292,47 @@ def build_shapes(case) -> ShapeSet:
             kind, geom = _mesh(wall, where)
         box = _boxes(kind, geom)
         corners = _corners(kind, geom)
-        if m is not None and m.kind == "rotation":
+        table = _pose_table(m, f"{where}.motion", dim2) if m is not None and m.kind == "table" else None
+        if m is not None and m.kind in ("rotation", "table") and m.axis_point is not None:
             centre = np.array(m.axis_point, float)
         else:
             centre = corners.mean(axis=0)
         reach = float(np.max(np.linalg.norm(corners - centre, axis=1)))
-        out.shapes.append(Shape(wall.name, wall, kind, geom, box, centre, reach))
+        out.shapes.append(Shape(wall.name, wall, kind, geom, box, centre, reach, table))
     return out
+
+
+def _pose_table(motion, where, dim2):
+    """(T, 5) rows t, dx, dy, dz, angle of a table motion's CSV file (header naming the columns)."""
+    path = Path(motion.file)
+    if not path.is_file():
+        raise CaseError(f"{where}.file = {motion.file!r}: no such file (a CSV of t, dx, dy, dz, angle; a "
+                        f"relative path is taken from the working directory {str(Path.cwd())!r})")
+    cols = ("t", "dx", "dy", "dz", "angle")
+    try:
+        data = np.genfromtxt(path, delimiter=",", names=True, dtype=float, encoding="utf-8")
+    except Exception as exc:  # noqa: BLE001 - any reader failure is bad input
+        raise CaseError(f"{where}.file = {motion.file!r}: not a readable CSV file ({exc})") from None
+    names = data.dtype.names or ()
+    missing = [c for c in cols if c not in names]
+    if missing:
+        raise CaseError(f"{where}.file = {motion.file!r}: no column {', '.join(missing)}; the header must name "
+                        f"{', '.join(cols)}")
+    table = np.column_stack([np.atleast_1d(data[c]) for c in cols])
+    if not np.all(np.isfinite(table)):
+        row = int(np.flatnonzero(~np.all(np.isfinite(table), axis=1))[0])
+        raise CaseError(f"{where}.file = {motion.file!r}: row {row + 1} holds a value that is not a finite number")
+    if np.any(np.diff(table[:, 0]) <= 0.0):
+        row = int(np.flatnonzero(np.diff(table[:, 0]) <= 0.0)[0])
+        raise CaseError(f"{where}.file = {motion.file!r}: t must increase from row to row; row {row + 2} has "
+                        f"t = {table[row + 1, 0]:g} after {table[row, 0]:g}")
+    if np.any(table[:, 4] != 0.0) and (motion.axis is None or motion.axis_point is None):
+        raise CaseError(f"{where}: a table with angles needs axis_point and axis (the rotation axis)")
+    if dim2 and np.any(table[:, 3] != 0.0):
+        raise CaseError(f"{where}.file = {motion.file!r}: in 2D a shape moves in the x-y plane (dz = 0)")
+    if dim2 and np.any(table[:, 4] != 0.0) and (abs(motion.axis[0]) > 0 or abs(motion.axis[1]) > 0):
+        raise CaseError(f"{where}.axis = {list(motion.axis)}: in 2D a shape rotates about z only")
+    return table
 
 
 def _polyline(wall, where):

@@ -169,6 +169,11 @@ class SoftSphereEngine(ParticleEngine):
             )
         return t.dt
 
+    def check_initial_overlaps(self, tolerance: float = 1e-9) -> None:
+        """As ``ParticleEngine.check_initial_overlaps``, and no particle across a wall shape."""
+        super().check_initial_overlaps(tolerance)
+        self.shapes.check_overlaps(self.state, self.time, tolerance)
+
     def _touching_pairs(self) -> tuple[np.ndarray, np.ndarray]:
         st = self.state
         rs, partner, _, _ = build_pairs(st.position, st.radius, 0.0, self.dim2)

@@ -172,7 +172,9 @@ class SoftSphereEngine(ParticleEngine):
     def check_initial_overlaps(self, tolerance: float = 1e-9) -> None:
         """As ``ParticleEngine.check_initial_overlaps``, and no particle across a wall shape."""
         super().check_initial_overlaps(tolerance)
-        self.shapes.check_overlaps(self.state, self.time, tolerance)
+        shapes = getattr(self, "shapes", None)  # the GPU engine, a subclass, has none
+        if shapes is not None:
+            shapes.check_overlaps(self.state, self.time, tolerance)
 
     def _touching_pairs(self) -> tuple[np.ndarray, np.ndarray]:
         st = self.state

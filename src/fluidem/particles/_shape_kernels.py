@@ -640,6 +640,16 @@ def shape_forces(shapes, pos, ref_pos, vel, omega, radius, mass, species, ids, r
             load[k, 5] -= rx * fy - ry * fx
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def shape_step(shapes, pos, ref_pos, vel, omega, radius, mass, species, ids, rebuilt, last_reorder, t, dt, update,
+               flat, sum_f, sum_c):
+    """``shape_forces`` where there are shapes: inlined into the stepping loop, so that a run without shapes
+    pays a test per step, not a call that unpacks the shapes' arrays."""
+    if shapes[0].shape[0] > 0:
+        shape_forces(shapes, pos, ref_pos, vel, omega, radius, mass, species, ids, rebuilt, last_reorder, t, dt,
+                     update, flat, sum_f, sum_c)
+
+
 @njit(cache=True, error_model="numpy")
 def _free_unlisted(n, near_count, near_elem, slot_elem, slot_hist):
     """Free the history slots whose element is no longer in the particle's near list (out of reach: the

@@ -22,7 +22,7 @@ from ._pair_kernels import chunk_run, make_work
 from ._neighbours_kernels import build_pairs, carry_history, cell_order, contacts_first, renumber_pairs
 from .contact._dispatch import contact_force, contact_force_full
 from .contact.base import N_SLOTS, SLOT_EXTENDED, SLOT_ROLLING_FRICTION
-from ._shape_kernels import shape_forces
+from ._shape_kernels import shape_forces, shape_step
 
 U = np.uintp  # unsigned array index: no wrap-around code (module docstring)
 assert N_SLOTS == 12, "_law reads the first 8 slots of a packed contact row, _law_full all 12"
@@ -759,7 +759,7 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
     ``wall_touch``, ``near_count``, ``near_wall``: the walls within reach (``near_walls``), made anew at each
     rebuild; the caller keeps them between calls (made at set-up and after a restore).
     ``shapes``: the wall shapes' arrays (``shapes.ShapeSet.kernel_arrays``), their forces added once a step
-    (``_shape_kernels.shape_forces``; nothing without shapes).
+    (``_shape_kernels.shape_step``; nothing without shapes).
     """
     limit2 = (0.5 * skin) ** 2
     update = nsteps > 0  # a run-time True, as compute_forces passes it (a literal would compile pair_forces twice)
@@ -798,7 +798,7 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
             rebuilds += 1
         pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
                     dt, update, sum_f, sum_c, block, flat, work)
-        shape_forces(shapes, pos, ref_pos, vel, omega, radius, mass, species, ids, moved > 0, last_reorder, t, dt, update,
+        shape_step(shapes, pos, ref_pos, vel, omega, radius, mass, species, ids, moved > 0, last_reorder, t, dt, update,
                      flat, sum_f, sum_c)
         mode = 2 if s < nsteps - 1 else 1
         moved = gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,

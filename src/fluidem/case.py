@@ -120,13 +120,24 @@ class Placement(Strict):
 
 
 class Motion(Strict):
-    """Prescribed wall motion: constant velocity or sinusoidal oscillation x = A sin(2π f t + φ)."""
+    """Prescribed wall motion: constant velocity, sinusoidal oscillation x = A sin(2π f t + φ), or (wall
+    shapes only) rotation at a constant rate about an axis."""
 
-    kind: Literal["constant_velocity", "oscillation"] = Field(description="kind of motion")
+    kind: Literal["constant_velocity", "oscillation", "rotation", "table"] = Field(
+        description="kind of motion; 'rotation' and 'table' (poses read from a CSV file) move the shapes "
+        "(polyline, polygon, cylinder, mesh) only")
     velocity: Vec3 | None = Field(None, description="[m/s] for constant_velocity")
     amplitude: Vec3 | None = Field(None, description="[m] displacement amplitude vector for oscillation")
     frequency: float | None = Field(None, gt=0.0, description="[Hz] for oscillation")
     phase: float = Field(0.0, description="[rad]")
+    axis_point: Vec3 | None = Field(None, description="[m] a point of the rotation axis (rotation)")
+    axis: Vec3 | None = Field(None, description="direction of the rotation axis (rotation; any length but zero; "
+                                                "in 2D along z)")
+    angular_velocity: float | None = Field(None, description="[rad/s] rotation rate, right-handed about axis "
+                                                             "(rotation)")
+    file: str | None = Field(None, description="table: CSV file with columns t [s], dx, dy, dz [m] (displacement) "
+                                               "and angle [rad] (about axis through axis_point), interpolated "
+                                               "linearly in t; a relative path is taken from the working directory")
 
     @model_validator(mode="after")
     def _check(self):
@@ -134,6 +145,16 @@ class Motion(Strict):
             raise ValueError("motion kind 'constant_velocity' needs velocity")
         if self.kind == "oscillation" and (self.amplitude is None or self.frequency is None):
             raise ValueError("motion kind 'oscillation' needs amplitude and frequency")
+        if self.kind == "rotation":
+            if self.axis_point is None or self.axis is None or self.angular_velocity is None:
+                raise ValueError("motion kind 'rotation' needs axis_point, axis and angular_velocity")
+            if math.hypot(*self.axis) == 0:
+                raise ValueError(f"motion.axis = {list(self.axis)}: the rotation axis must not be zero")
+        if self.kind == "table":
+            if not self.file:
+                raise ValueError("motion kind 'table' needs file (a CSV of t, dx, dy, dz, angle)")
+            if self.axis is not None and math.hypot(*self.axis) == 0:
+                raise ValueError(f"motion.axis = {list(self.axis)}: the rotation axis must not be zero")
         return self
 
 
@@ -141,12 +162,20 @@ class WallContact(ContactOverride):
     """Per-wall override of the particle–wall contact parameters."""
 
 
+SHAPE_KINDS = ("polyline", "polygon", "cylinder", "mesh")
+
+
 class Wall(Strict):
-    """A plane (point + inward normal) or an axis-aligned box of planes facing inwards."""
+    """A plane (point + inward normal), an axis-aligned box of planes facing inwards, or a shape: a 2D
+    polyline of segments, a flat polygon, a cylinder's lateral surface or an STL triangle mesh."""
 
     name: str = Field("wall", description="wall name (wall_pairs and the output refer to it)")
-    kind: Literal["plane", "box"] = Field(description="an infinite plane or an axis-aligned box of six planes")
-    point: Vec3 | None = Field(None, description="a point of the plane [m]")
+    kind: Literal["plane", "box", "polyline", "polygon", "cylinder", "mesh"] = Field(
+        description="an infinite plane, an axis-aligned box of six planes, or a shape (soft spheres only): "
+        "polyline (2D segments), polygon (3D flat convex polygon), cylinder (lateral surface of finite length), "
+        "mesh (triangles of an STL file)")
+    point: Vec3 | None = Field(None, description="a point of the plane [m]; cylinder: the centre of one end of "
+                                                 "its axis")
     normal: Vec3 | None = Field(None, description="normal pointing into the particle region")
     lower: Vec3 | None = Field(None, description="box lower corner [m]")
     upper: Vec3 | None = Field(None, description="box upper corner [m]")
@@ -156,6 +185,18 @@ class Wall(Strict):
         "particle leaving through one side re-enters through the other and particles interact across them by nearest "
         "image (soft-sphere engine on the CPU). Not z in 2D; with [gas], the gas sides on that axis must be "
         "periodic too")
+    points: list[list[float]] | None = Field(
+        None, description="[m] corners: polyline, its points [x, y] in the x-y plane, joined in order (2D); "
+        "polygon, its corners [x, y, z] in order round a convex flat polygon (3D)")
+    closed: bool = Field(False, description="polyline: join the last point back to the first")
+    axis: Vec3 | None = Field(None, description="cylinder: direction of the axis from point (any length but zero)")
+    radius: float | None = Field(None, gt=0.0, description="cylinder radius [m]")
+    length: float | None = Field(None, gt=0.0, description="cylinder length along the axis from point [m]")
+    inside: bool = Field(True, description="cylinder: particles inside it (a drum, a pipe), else outside (a roll)")
+    file: str | None = Field(None, description="mesh: STL file (ASCII or binary); a relative path is taken from "
+                                               "the working directory, as placement.file")
+    scale: float = Field(1.0, gt=0.0, description="mesh: factor on the file's coordinates (e.g. 0.001 for mm)")
+    offset: Vec3 = Field((0.0, 0.0, 0.0), description="mesh: [m] added to the scaled coordinates")
     motion: Motion | None = Field(None, description="prescribed motion; default at rest")
     contact: WallContact | None = Field(None, description="this wall's overrides of the particle–wall contact")
     youngs_modulus: float | None = Field(None, gt=0.0, description="E [Pa] of the wall for Hertz–Mindlin")
@@ -171,7 +212,7 @@ class Wall(Strict):
             if self.periodic:
                 raise ValueError(f"plane wall {self.name!r}: periodic = {self.periodic} needs kind = 'box' (a box's "
                                  "two sides on an axis are joined; a plane has no opposite side)")
-        else:
+        elif self.kind == "box":
             if self.lower is None or self.upper is None:
                 raise ValueError(f"box wall {self.name!r} needs lower and upper")
             if len(set(self.periodic)) != len(self.periodic):
@@ -181,6 +222,30 @@ class Wall(Strict):
             for a, b, ax in zip(self.lower, self.upper, "xyz"):
                 if not b > a:
                     raise ValueError(f"box wall {self.name!r}: upper {ax} = {b} must exceed lower {ax} = {a}")
+        elif self.kind in ("polyline", "polygon"):
+            want = 2 if self.kind == "polyline" else 3
+            least = 2 if self.kind == "polyline" else 3
+            if self.points is None or len(self.points) < least:
+                raise ValueError(f"{self.kind} wall {self.name!r} needs points: at least {least} corners of "
+                                 f"{want} coordinates each")
+            for j, p in enumerate(self.points):
+                if len(p) != want:
+                    raise ValueError(f"{self.kind} wall {self.name!r}: points.{j} = {p} has {len(p)} coordinates; "
+                                     f"a {self.kind} takes {want} ({'x, y' if want == 2 else 'x, y, z'})")
+        elif self.kind == "cylinder":
+            if self.point is None or self.axis is None or self.radius is None or self.length is None:
+                raise ValueError(f"cylinder wall {self.name!r} needs point, axis, radius and length")
+            if math.hypot(*self.axis) == 0:
+                raise ValueError(f"cylinder wall {self.name!r}: axis = {list(self.axis)} must not be zero")
+        elif self.kind == "mesh":
+            if not self.file:
+                raise ValueError(f"mesh wall {self.name!r} needs file (an STL file)")
+        if self.periodic and self.kind not in ("plane", "box"):
+            raise ValueError(f"{self.kind} wall {self.name!r}: periodic = {self.periodic} needs kind = 'box'")
+        if self.motion is not None and self.motion.kind in ("rotation", "table") and self.kind in ("plane", "box"):
+            raise ValueError(f"{self.kind} wall {self.name!r}: motion.kind = {self.motion.kind!r} moves shapes only "
+                             f"(kind one of {list(SHAPE_KINDS)}); a plane or box moves by constant_velocity or "
+                             "oscillation")
         return self
 
 
@@ -353,6 +418,11 @@ class Case(Strict):
                 raise ValueError(f"walls.{j}.name = {name!r}: wall names must be unique "
                                  f"(walls.{names.index(name)}.name is {name!r} too)")
         self._check_periodic()
+        for j, w in enumerate(self.walls):
+            if w.kind in SHAPE_KINDS and self.particles.contact.instantaneous:
+                raise ValueError(f"walls.{j}.kind = {w.kind!r}: wall shapes take soft-sphere contact laws; "
+                                 f"particles.contact.model = {self.particles.contact.model!r} is event-driven, "
+                                 "with planes and boxes only")
         for wp in self.particles.wall_pairs:
             if wp.wall is not None and wp.wall not in names:
                 raise ValueError(f"particles.wall_pairs: wall {wp.wall!r} is not one of {names}")

@@ -24,6 +24,7 @@ from .gas.solver import GasConvergenceError
 from .io.atomic import write_text_atomic
 from .io.gas_fields import GasFieldWriter
 from .io.probes_csv import ProbeWriter
+from .io.shapes_csv import ShapeWriter
 from .io.restart import CHECKPOINT_NAMES, PREVIOUS_RESTART_NAME, RESTART_NAME, load_restart, save_restart
 from .io.summary import finite, summary_json
 from .io.snapshots import ParticleWriter
@@ -340,6 +341,8 @@ class Simulation:
         if len(self.case.particles.species) > 1:  # per-species heights, segregation and mixing indices
             probes.append(M.mixing_probes)
         self.observers["probes"] = ProbeWriter(self.out_dir, probes, EveryTime(o.probe_interval or end / 1000))
+        if len(getattr(self.engine, "shapes", ())):  # wall shapes: their loads and poses, shapes.csv
+            self.observers["shapes"] = ShapeWriter(self.out_dir, EveryTime(o.probe_interval or end / 1000))
         self.observers["checkpoint"] = Checkpointer(self.out_dir, EveryTime(o.checkpoint_interval or end / 10))
 
     # ------------------------------------------------------------ stepping

@@ -23,6 +23,7 @@ from ._neighbours_kernels import (build_pairs, build_pairs_periodic, carry_histo
                                   contacts_first_periodic, renumber_pairs)
 from .contact._dispatch import contact_force, contact_force_full
 from .contact.base import N_SLOTS, SLOT_EXTENDED, SLOT_ROLLING_FRICTION
+from ._shape_kernels import shape_forces, shape_step
 
 U = np.uintp  # unsigned array index: no wrap-around code (module docstring)
 assert N_SLOTS == 12, "_law reads the first 8 slots of a packed contact row, _law_full all 12"
@@ -750,9 +751,10 @@ def reorder(pos, vel, omega, force, torque, radius, mass, inertia, inv_mass, inv
 @njit(cache=True, error_model="numpy")
 def compute_forces(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, wall_point0, wall_normal,
                    wall_hist, gravity, ext_force, ext_damping, dim2, row_start, partner, hist, slab_start, slab_members,
-                   t, dt, update, force, torque, nthreads, period):
+                   t, dt, update, force, torque, nthreads, period, shapes):
     """Forces and torques at the current state (no integration; history updated only if ``update``).
-    ``period`` (3,): the box length along each periodic axis, 0 elsewhere."""
+    ``period`` (3,): the box length along each periodic axis, 0 elsewhere. ``shapes``: the wall shapes' arrays
+    (``shapes.ShapeSet.kernel_arrays``; their near lists made anew)."""
     sum_f = np.zeros_like(force)
     sum_c = np.zeros_like(force)
     block = thread_blocks(row_start, slab_start, slab_members, nthreads)
@@ -760,6 +762,8 @@ def compute_forces(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, 
     pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
                 dt, update, sum_f, sum_c, block, flat, make_work(pp, row_start, hist, slab_start, slab_members, nthreads),
                 period)
+    shape_forces(shapes, pos, pos, vel, omega, radius, mass, species, species, True, -1, t, dt, update, flat, sum_f,
+                 sum_c)
     near_count, near_wall = all_walls(pos.shape[0], wall_normal.shape[0])
     # has_ext and mode as run-time values, as advance passes them: a constant argument is a literal type to
     # Numba, which would compile gather_forces once more for it (and with it all it calls)
@@ -775,7 +779,8 @@ def compute_forces(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, 
 def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia, species, pp, pw,
             wall_motion, wall_point0, wall_normal, wall_hist, gravity, ext_force, ext_damping, dim2,
             row_start, partner, hist, slab_start, slab_members, ref_pos, skin, step0, dt, nsteps, nthreads,
-            inertia, ids, reorder_interval, last_reorder, wall_touch, near_count, near_wall, period, box_lo, image):
+            inertia, ids, reorder_interval, last_reorder, wall_touch, near_count, near_wall, period, box_lo, image,
+            shapes):
     """Run ``nsteps`` velocity-Verlet DEM steps from step ``step0`` (time step0 * dt).
 
     Order of one step::
@@ -804,6 +809,8 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
     ``period`` (3,): the box length along each periodic axis, 0 elsewhere; ``box_lo`` (3,) the box's lower
     corner; ``image`` (N, 3) int64 the image counts, updated as particles wrap. With a periodic axis the
     list is ``build_pairs_periodic``'s and pair offsets are taken by nearest image.
+    ``shapes``: the wall shapes' arrays (``shapes.ShapeSet.kernel_arrays``), their forces added once a step
+    (``_shape_kernels.shape_step``; nothing without shapes).
     """
     per = (period[0] != 0.0) | (period[1] != 0.0) | (period[2] != 0.0)
     limit2 = (0.5 * skin) ** 2
@@ -849,6 +856,8 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
             rebuilds += 1
         pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
                     dt, update, sum_f, sum_c, block, flat, work, period)
+        shape_step(shapes, pos, ref_pos, vel, omega, radius, mass, species, ids, moved > 0, last_reorder, t, dt, update,
+                   flat, sum_f, sum_c)
         mode = 2 if s < nsteps - 1 else 1
         moved = gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
                               wall_axis, wall_hist, wall_touch, near_count, near_wall, gravity, ext_force, ext_damping,

@@ -19,6 +19,7 @@ from ._neighbours_kernels import (build_pairs, build_pairs_periodic, carry_histo
 from ._population_kernels import drop_pairs
 from .contact.base import N_SLOTS
 from .engine import ParticleEngine
+from .shapes import build_shapes
 
 STABILITY_FRACTION = 0.1  # dt must stay below t_c / 10: at least ten steps per contact
 # default renumbering in cell order (neighbours.reorder_interval): every 1000 steps, at the next list rebuild
@@ -37,6 +38,9 @@ class SoftSphereEngine(ParticleEngine):
         # velocity where the force is evaluated (each sub-step); zero unless a coupling sets it
         self.ext_damping = np.zeros(st.n)
         self.pp, self.pw, self.contact_times = self._contact_tables()
+        self.shapes = build_shapes(case)  # wall shapes (polylines, polygons, cylinders, meshes)
+        self.shape_table, shape_times = self.shapes.contact_table(self)
+        self.contact_times += shape_times
         # an adhesive law keeps each formed contact's pull-off distance in a fourth history column
         self.wall_hist = np.zeros((st.n, len(self.walls.planes), 4 if self.wall_adhesive else 3))
         dmax = 2.0 * self.largest_radius  # of the particles there and of those inlets may insert
@@ -63,8 +67,11 @@ class SoftSphereEngine(ParticleEngine):
         else:
             contacts_first(st.position, st.radius, self.row_start, self.partner, self.hist)  # as every rebuild leaves it
         self._reach_walls()
+        self.shapes.setup(self)
         self.reorder_listeners = []  # callables f(order) told of each renumbering (new k is former order[k])
         self._compute_forces(update=False)
+        if self.shapes.after_advance():  # a near list overflowed: wider lists, the first forces again
+            self._compute_forces(update=False)
 
     # ------------------------------------------------------------ set-up
     def _contact_tables(self):
@@ -209,6 +216,13 @@ class SoftSphereEngine(ParticleEngine):
             )
         return t.dt
 
+    def check_initial_overlaps(self, tolerance: float = 1e-9) -> None:
+        """As ``ParticleEngine.check_initial_overlaps``, and no particle across a wall shape."""
+        super().check_initial_overlaps(tolerance)
+        shapes = getattr(self, "shapes", None)  # the GPU engine, a subclass, has none
+        if shapes is not None:
+            shapes.check_overlaps(self.state, self.time, tolerance)
+
     def _touching_pairs(self) -> tuple[np.ndarray, np.ndarray]:
         st = self.state
         rs, partner, _, _ = self._build_pairs(0.0)
@@ -221,7 +235,7 @@ class SoftSphereEngine(ParticleEngine):
                          self.wall_motion, self.wall_point0, self.wall_normal, self.wall_hist, self.gravity,
                          self.ext_force, self.ext_damping, self.dim2, self.row_start, self.partner, self.hist, self.slab_start,
                          self.slab_members, self.time, self.dt, update, st.force, st.torque,
-                         numba.get_num_threads(), self.period)
+                         numba.get_num_threads(), self.period, self.shapes.kernel_arrays())
 
     def external_force(self) -> np.ndarray:
         """The external (gas) force on each particle at the current velocity, ext_force − c v [N], (N, 3)."""
@@ -239,7 +253,9 @@ class SoftSphereEngine(ParticleEngine):
             self.wall_hist, self.gravity, self.ext_force, self.ext_damping, self.dim2, self.row_start, self.partner, self.hist,
             self.slab_start, self.slab_members, self.ref_pos, self.skin, self.steps, self.dt, nsteps,
             numba.get_num_threads(), st.inertia, st.ids, self.reorder_interval, self.last_reorder,
-            self.wall_touch, self.near_count, self.near_wall, self.period, self.box_lo, st.image)
+            self.wall_touch, self.near_count, self.near_wall, self.period, self.box_lo, st.image,
+            self.shapes.kernel_arrays())
+        self.shapes.after_advance()
         self.steps += nsteps
         self.time = self.steps * self.dt
         self.rebuilds += nreb
@@ -272,6 +288,7 @@ class SoftSphereEngine(ParticleEngine):
 
         self.ext_force, self.ext_damping, self.wall_hist = grown(self.ext_force), grown(self.ext_damping), \
             grown(self.wall_hist)
+        self.shapes.replace_particles(keep, added.ids if added is not None else np.zeros(0, np.int64))
         if added is not None:
             added.force[...] = added.mass[:, None] * self.gravity
             added.torque[...] = 0.0
@@ -297,6 +314,8 @@ class SoftSphereEngine(ParticleEngine):
             "engine/slab_members": self.slab_members, "engine/ext_force": self.ext_force,
             "engine/ext_damping": self.ext_damping,
         })
+        if len(self.shapes):
+            out.update(self.shapes.checkpoint_arrays())
         return out
 
     def checkpoint_scalars(self) -> dict:
@@ -313,6 +332,7 @@ class SoftSphereEngine(ParticleEngine):
         for k in ("row_start", "partner", "hist", "slab_start", "slab_members"):
             setattr(self, k, np.ascontiguousarray(arrays[f"engine/{k}"]))
         self._reach_walls()
+        self.shapes.restore(arrays)
         self.dt = float(scalars["dt"])
         self.steps = int(scalars["steps"])
         self.rebuilds = int(scalars["rebuilds"])

@@ -50,6 +50,11 @@ def gpu_refusals(case) -> list[str]:
     for i, w in enumerate(case.walls):
         if getattr(w, "periodic", None):
             out.append(f"walls.{i}.periodic = {list(w.periodic)} (periodic sides run on the CPU only)")
+    from .shapes import refusal
+
+    shapes = refusal(case)
+    if shapes:
+        out.append(shapes)
     found = set()
 
     def visit(node, path):  # every contact law of the case: the default, the wall law, the override tables

@@ -3,7 +3,8 @@
 A box wall becomes its axis-aligned planes (four in 2D, six in 3D, one fewer with
 ``open_top``), named ``<box>.xmin`` … ``<box>.zmax``; an axis in the box's ``periodic`` list has no planes:
 its two sides are joined instead (``WallSet.period``). Motion is a constant velocity
-or a sinusoidal oscillation; kernels evaluate it from the time (``wall_state``).
+or a sinusoidal oscillation; kernels evaluate it from the time (``wall_state``). The other wall kinds
+(polyline, polygon, cylinder, mesh) are shapes (``shapes.py``).
 """
 from __future__ import annotations
 
@@ -63,6 +64,8 @@ def build_walls(case) -> WallSet:
     g = np.array(case.gravity)
     ws = WallSet()
     for wall in case.walls:
+        if wall.kind not in ("plane", "box"):
+            continue  # a wall shape (shapes.py)
         if wall.kind == "plane":
             n = np.array(wall.normal, float)
             n /= np.linalg.norm(n)

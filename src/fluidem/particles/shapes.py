@@ -125,7 +125,8 @@ class ShapeSet:
         self.motion = self.motion_table()
         self.reach = np.array([s.reach for s in self.shapes], float)
         self.table = np.ascontiguousarray(engine.shape_table)
-        rmax = float(st.radius.max()) if n else 0.0
+        # the largest particle there or to come from an inlet (the broad-phase cells must reach it)
+        rmax = float(getattr(engine, "largest_radius", st.radius.max() if n else 0.0))
         self.grid, self.dims, self.cell_start, self.cell_elems = _grid(box, rmax + self.skin, engine.dim2)
         self.grid[4] = self.skin
         self.near_count = np.zeros(n, np.int64)

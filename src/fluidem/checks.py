@@ -134,21 +134,26 @@ def scan(position: np.ndarray, radius: np.ndarray, *, velocity=None, omega=None,
 
 
 def largest_pair_overlap(position: np.ndarray, radius: np.ndarray, row_start: np.ndarray, partner: np.ndarray,
-                         locate_above: float = 0.0) -> tuple[float, int, int]:
+                         locate_above: float = 0.0, period: np.ndarray | None = None) -> tuple[float, int, int]:
     """The deepest overlap of two particles as a fraction of the smaller diameter: (fraction, i, j);
     (0, −1, −1) when no pair overlaps. The pairs are those of the contact list (``row_start``, ``partner``: CSR
     of the pairs that may touch), in one compiled pass; the pair (i, j) is looked for only when the fraction
-    exceeds ``locate_above`` (else −1, −1)."""
+    exceeds ``locate_above`` (else −1, −1). ``period`` (3,): the box length along each periodic axis (0, or None:
+    none), offsets taken by nearest image there."""
     from .analysis._contacts_kernels import contact_counts
 
     if not partner.shape[0]:
         return 0.0, -1, -1
-    _, _, worst = contact_counts(position, radius, row_start, partner)
+    period = np.zeros(3) if period is None else np.asarray(period, dtype=float)
+    _, _, worst = contact_counts(position, radius, row_start, partner, period)
     if not worst > max(locate_above, 0.0):
         return max(float(worst), 0.0), -1, -1
     i = np.repeat(np.arange(position.shape[0]), np.diff(row_start))
     j = partner.astype(np.int64)
-    dist = np.linalg.norm(position[i] - position[j], axis=1)
+    r = position[i] - position[j]
+    per = period > 0.0
+    r[:, per] -= period[per] * np.round(r[:, per] / period[per])
+    dist = np.linalg.norm(r, axis=1)
     rel = (radius[i] + radius[j] - dist) / (2.0 * np.minimum(radius[i], radius[j]))
     k = int(np.argmax(rel))
     return float(rel[k]), int(i[k]), int(j[k])
@@ -256,7 +261,7 @@ class RunChecks:
                 raise self._domain(sc)
             if eng.contact_forces:  # soft spheres; hard spheres collide without overlap
                 rel, i, j = largest_pair_overlap(st.position, st.radius, eng.row_start, eng.partner,
-                                                 self.settings.max_overlap)
+                                                 self.settings.max_overlap, eng.period)
                 if sc.wall_rel > rel:
                     rel, i, j = sc.wall_rel, sc.wall_i, -1
                 if rel > self.settings.max_overlap:

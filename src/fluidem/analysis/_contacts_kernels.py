@@ -5,35 +5,14 @@ from numba import njit
 from ..particles._neighbours_kernels import nearest_image
 from ..particles._softsphere_kernels import wall_contact, walls_now
 
-
-@njit(cache=True, error_model="numpy")
-def contact_counts(pos, radius, row_start, partner):
-    """(contacts per particle (N,) int64, number of contacts, largest overlap / diameter [-])."""
-    n = pos.shape[0]
-    per = np.zeros(n, dtype=np.int64)
-    total = 0
-    worst = 0.0
-    for i in range(n):
-        for p in range(row_start[i], row_start[i + 1]):
-            j = partner[p]
-            r2 = 0.0
-            for d in range(3):
-                r2 += (pos[i, d] - pos[j, d]) ** 2
-            cut = radius[i] + radius[j]
-            if r2 < cut * cut:
-                per[i] += 1
-                per[j] += 1
-                total += 1
-                ov = (cut - np.sqrt(r2)) / (2.0 * min(radius[i], radius[j]))
-                if ov > worst:
-                    worst = ov
-    return per, total, worst
+NO_PERIOD = np.zeros(3)  # ``period`` of a box without periodic sides
 
 
 @njit(cache=True, error_model="numpy")
-def contact_counts_periodic(pos, radius, row_start, partner, period):
-    """``contact_counts`` in a box with periodic sides: offsets by nearest image (``period`` (3,) the box
-    length along each periodic axis, 0 elsewhere; ``_neighbours_kernels.nearest_image``)."""
+def contact_counts(pos, radius, row_start, partner, period):
+    """(contacts per particle (N,) int64, number of contacts, largest overlap / diameter [-]). ``period`` (3,):
+    the box length along each periodic axis, 0 elsewhere; offsets by nearest image there
+    (``_neighbours_kernels.nearest_image``, which leaves an offset along a non-periodic axis as it is)."""
     n = pos.shape[0]
     per = np.zeros(n, dtype=np.int64)
     total = 0

@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from ..io.probes_csv import read_probes
-from ._contacts_kernels import contact_counts, contact_counts_periodic
+from ._contacts_kernels import NO_PERIOD, contact_counts
 from .spectrum import MIN_SAMPLES as SPECTRUM_MIN_SAMPLES, dominant_frequency, spectral_peaks
 
 PRESSURE_PROBE_HEIGHT = 0.20  # [m] above the inlet, Sun 2007 Fig 3 / Hoomans 1996 §5.3
@@ -50,10 +50,7 @@ def contact_numbers(engine) -> np.ndarray:
     row_start = getattr(engine, "row_start", None)
     if row_start is None or st.n == 0:
         return np.zeros(st.n, dtype=np.int64)
-    if getattr(engine, "periodic", False):  # contacts across a periodic side, by nearest image
-        return contact_counts_periodic(st.position, st.radius, row_start, engine.partner, engine.period)[0]
-    per, _, _ = contact_counts(st.position, st.radius, row_start, engine.partner)
-    return per
+    return contact_counts(st.position, st.radius, row_start, engine.partner, getattr(engine, "period", NO_PERIOD))[0]
 
 
 def multicontact_ratio(nc: np.ndarray) -> float:

@@ -8,7 +8,7 @@ import numpy as np
 
 from ..particles._softsphere_kernels import walls_now
 from ..particles.engine import ParticleEngine
-from ._contacts_kernels import contact_counts, contact_counts_periodic, wall_totals
+from ._contacts_kernels import NO_PERIOD, contact_counts, wall_totals
 
 
 def energies(engine) -> dict[str, float]:
@@ -20,11 +20,9 @@ def energies(engine) -> dict[str, float]:
 def contacts(engine) -> dict[str, float]:
     """Particle contacts, coordination number (mean contacts per particle) and max overlap / diameter."""
     st = engine.state
-    if getattr(engine, "periodic", False):  # contacts across a periodic side, by nearest image
-        per, total, worst = contact_counts_periodic(st.position, st.radius, engine.row_start, engine.partner,
-                                                    engine.period)
-    else:
-        per, total, worst = contact_counts(st.position, st.radius, engine.row_start, engine.partner)
+    # contacts across a periodic side by nearest image (engine.period: 0 along the other axes)
+    per, total, worst = contact_counts(st.position, st.radius, engine.row_start, engine.partner,
+                                       getattr(engine, "period", NO_PERIOD))
     n = max(st.n, 1)
     wall_contacts = 0
     if engine.walls.planes:

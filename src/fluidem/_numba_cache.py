@@ -46,11 +46,12 @@ def _relative_imports(path: Path, text: str) -> list[Path]:
 
 
 def kernel_sources(root: Path = ROOT) -> list[Path]:
-    """The files whose change can change compiled code: those defining Numba functions (``njit``), and
-    the package modules they import from, transitively (constants such as ``contact.base.N_SLOTS`` and
+    """The files whose change can change compiled code: those defining Numba functions (``njit``, and the
+    CUDA kernels of ``cuda.jit``, cached on disk as the CPU's are), and the package modules they import from,
+    transitively (constants such as ``contact.base.N_SLOTS`` and
     the cell flags of ``gas.grid`` are frozen into the compiled code that reads them). Sorted."""
     texts = {p.resolve(): p.read_text(encoding="utf-8") for p in root.rglob("*.py")}
-    seen = {p for p, t in texts.items() if "njit" in t}
+    seen = {p for p, t in texts.items() if "njit" in t or "cuda.jit" in t}
     todo = list(seen)
     while todo:
         p = todo.pop()
@@ -93,13 +94,16 @@ def _locator(base, stamp: str, root: Path):
     return Locator
 
 
-def install(root: Path = ROOT) -> bool:
+def install(root: Path = ROOT, caching=None) -> bool:
     """Put the package-stamped locators first in Numba's list (once per package root); False if this Numba
-    lays its cache out differently (then its own per-file stamps stay in force)."""
-    try:
-        from numba.core import caching
-    except ImportError:
-        return False
+    lays its cache out differently (then its own per-file stamps stay in force). ``caching``: another module
+    of the same layout (numba-cuda's ``numba.cuda.core.caching``, which caches the CUDA kernels), else
+    ``numba.core.caching``."""
+    if caching is None:
+        try:
+            from numba.core import caching
+        except ImportError:
+            return False
     impl = getattr(caching, "CacheImpl", None) or getattr(caching, "_CacheImpl", None)
     names = ("UserProvidedCacheLocator", "InTreeCacheLocator", "UserWideCacheLocator")
     bases = [getattr(caching, n, None) or getattr(caching, "_" + n, None) for n in names]

@@ -32,6 +32,19 @@ def kernel_signatures(SC, NC, T) -> dict:
     }
 
 
+def coupling_signatures(VC, PC, T) -> dict:
+    """{kernel: argument types} of the gas coupling's device kernels as ``coupling.exchange_gpu`` launches them."""
+    f1, f2, i1 = T.float64[::1], T.float64[:, ::1], T.int32[::1]
+    b, f = T.boolean, T.float64
+    return {
+        VC.centroid_deposit: (f2, f2, f1, f, f, b, f2, f2, f2, f2),
+        VC.zero: (f2,),
+        PC.deposit: (f1, f2, f2, f1, f1, f2, f2, f2, f2, f, f, f, f, b, b, b, f1, f2, f2, f2, f2, f2, b, f2, f2, i1),
+        PC.forces_split: (f2, f2, f1, f1, f2, f2, f2, f, f, b, b, b, b, b, f2, f1, f2),
+        PC.forces: (f2, f2, f1, f1, f2, f2, f2, f, f, b, b, b, b, b, f2, f2),
+    }
+
+
 def main(cc=(9, 0)) -> int:
     import numba.cuda.dispatcher as dispatcher
     from numba import cuda
@@ -41,8 +54,10 @@ def main(cc=(9, 0)) -> int:
     dispatcher.get_current_device = lambda: types.SimpleNamespace(compute_capability=cc)
     from fluidem.particles import _neighbours_cuda as NC
     from fluidem.particles import _softsphere_cuda as SC
+    from fluidem.coupling import _paired_cuda as PC
+    from fluidem.coupling import _voidage_cuda as VC
 
-    for kernel, sig in kernel_signatures(SC, NC, T).items():
+    for kernel, sig in {**kernel_signatures(SC, NC, T), **coupling_signatures(VC, PC, T)}.items():
         ptx, _ = cuda.compile_ptx(kernel.py_func, sig, cc=cc)
         print(f"{kernel.py_func.__name__}: {len(ptx)} characters of PTX for sm_{cc[0]}{cc[1]}")
     return 0

@@ -105,7 +105,7 @@ def test_gpu_kernels_compile_to_ptx():
     r = subprocess.run([sys.executable, str(ROOT / "tests" / "_helpers" / "gpu_ptx.py"), "9", "0"], env=env,
                        capture_output=True, text=True, timeout=SIMULATOR_TIMEOUT)
     assert r.returncode == 0, (r.stdout + r.stderr)[-3000:]
-    assert r.stdout.count("characters of PTX") == 8, r.stdout
+    assert r.stdout.count("characters of PTX") == 13, r.stdout  # 8 of the particle step, 5 of the coupling
 
 
 def test_contact_physics_the_gpu_path_lacks_is_refused_by_name():
@@ -118,3 +118,31 @@ def test_contact_physics_the_gpu_path_lacks_is_refused_by_name():
     assert rolling == ["particles.contact.rolling_friction = 0.2 (rolling resistance)"]
     hertzian = gpu_refusals(load_case("pour", {"particles.contact.nonlinearity": "hertzian"}))
     assert hertzian == ["particles.contact.nonlinearity = 'hertzian' (Sun 2007's Hertzian linear law)"]
+
+
+def test_coupling_options_the_device_exchange_lacks_keep_it_on_the_host():
+    """The GPU engine's coupling runs its particle side on the device for the default options of the built-in
+    2D gas cases (``tsuji-jet``: centroid map, 'particle' exchange, gidaspow); each option without a device
+    kernel is named, and ``coupling.gpu_exchange = 'host'`` asks for the host path."""
+    from types import SimpleNamespace
+
+    from fluidem.coupling.exchange_gpu import refusals
+
+    def coupling(case):
+        c = case.coupling
+        return SimpleNamespace(options=c, exchange=c.momentum_exchange, mapping=c.voidage,
+                               polydisperse=c.resolved_polydisperse([4e-3]))
+
+    assert refusals(coupling(load_case("tsuji-jet"))) == []
+    assert refusals(coupling(load_case("tsuji-jet", {"coupling.drag_update": "frozen",
+                                                     "coupling.boundary_faces": "exchange",
+                                                     "coupling.voidage.velocity_weighting": "volume",
+                                                     "coupling.voidage.smoothing_width": 0.01}))) == []
+    assert refusals(coupling(load_case("tsuji-jet", {"coupling.gpu_exchange": "host"}))) == [
+        "coupling.gpu_exchange = 'host'"]
+    sun = refusals(coupling(load_case("goldschmidt-sun-method")))
+    assert sun == ["coupling.momentum_exchange = 'cell' (the device runs 'particle')"]
+    hoomans = refusals(coupling(load_case("hoomans-tsuji")))
+    assert "coupling.voidage.method = 'area' (the device deposits by centre: 'centroid')" in hoomans
+    mixed = refusals(coupling(load_case("tsuji-jet", {"coupling.polydisperse": "sauter_y2"})))
+    assert mixed == ["coupling.polydisperse = 'sauter_y2' (the cells' Sauter mean diameter is mapped on the host)"]

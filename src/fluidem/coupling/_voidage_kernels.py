@@ -269,6 +269,16 @@ def map_solids(method, weighting, position, radius, volume, velocity, dx, dy, no
     wvx = np.empty((nx, ny))
     wvy = np.empty((nx, ny))
     deposit_solids(method, weighting, position, radius, volume, velocity, dx, dy, norm, frac, wsum, wvx, wvy)
+    return finish_map(frac, wsum, wvx, wvy, rx, ry, steps, to_3d, eq49_factor, min_voidage, voidage, solids_u,
+                      solids_v)
+
+
+@njit(cache=True)
+def finish_map(frac, wsum, wvx, wvy, rx, ry, steps, to_3d, eq49_factor, min_voidage, voidage, solids_u, solids_v):
+    """The cell part of ``map_solids`` after the deposit (``deposit_solids``' outputs, or the device's): ``steps``
+    diffusion steps of ``frac`` (changed in place), ε = 1 − frac (Hoomans 1996 eq. 49 with ``to_3d``), clipped
+    to ``min_voidage`` and counted, solids velocity wv/wsum (0 where wsum = 0); returns the clipped count."""
+    nx, ny = voidage.shape
     if steps > 0:
         diffuse(frac, rx, ry, steps, np.empty((nx, ny)))
     clipped = 0

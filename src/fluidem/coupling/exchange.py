@@ -156,6 +156,11 @@ class GasCoupling:
         # polydisperse drag (CouplingSection.polydisperse): 1/D̄ per cell of the gas step's map, (0, 0) for none
         self.polydisperse = self.options.resolved_polydisperse(2.0 * st.radius)
         self._inv_dbar = np.zeros(gd.shape if self.polydisperse == "sauter_y2" else (0, 0))
+        self._device = None
+        if hasattr(engine, "device_arrays"):  # particles on a GPU: the particle side there too, where it can
+            from .exchange_gpu import device_exchange
+
+            self._device = device_exchange(self)
         smap = self._map()
         self.state = self.solver.initial_state(voidage=smap.voidage, velocity=self.section.initial_velocity)
         self.gas_steps = 0
@@ -181,6 +186,8 @@ class GasCoupling:
     def _map(self):
         """particles → grid at the current positions: a ``SolidsMap`` (Sun 2007 eqs 34-35 / Hoomans eqs 49-50),
         and the cells' 1/D̄ of a polydisperse drag (DEM book 2012 eq. 10, ``voidage.sauter_inverse``)."""
+        if self._device is not None:
+            return self._device.map(self.mapping, self.grid)
         st = self._particles()
         if self._inv_dbar.shape[0] > 0:
             VK.sauter_inverse(st.position, st.radius, self.volume, self.grid.dx, self.grid.dy, self._inv_dbar)
@@ -338,6 +345,13 @@ class GasCoupling:
 
     def _deposit(self, voidage):
         """K_p and the face β, u_s of the "particle" exchange at the current particles and gas (step 2)."""
+        if self._device is not None:
+            self._check_gas()
+            bad = self._device.deposit(voidage, self.state)
+            if bad:
+                raise ValueError(f"particle drag: arguments out of range for {bad} particles "
+                                 "(voidage must lie in (0, 1], gas density > 0)")
+            return self._face_beta, self._face_solids[0], self._face_solids[1]
         st, gs, gd = self._particles(), self.state, self.grid
         self._check_gas()
         if self._kp.shape != st.radius.shape:
@@ -363,6 +377,10 @@ class GasCoupling:
         out of range raise ValueError after the pass (those particles' forces are then NaN).
         """
         eng = self.engine
+        if self._device is not None and self._paired_ready:  # the "particle" exchange, on the GPU
+            self._check_gas()
+            self._device.set_forces(self._split, bool(self.options.pressure_gradient_force))
+            return
         if self._split and self._paired_ready:
             st, gs, gd = self._particles(), self.state, self.grid
             self._check_gas()
@@ -400,6 +418,8 @@ class GasCoupling:
         gd, gs = self.grid, self.state
         if self.last_beta is None:
             raise RuntimeError("exchange_balance: no gas step taken yet")
+        if self._device is not None:
+            self._device.fetch_kp(self._kp)
         n = self.engine.state.position.shape[0]
         drag = np.zeros((n, 3))
         self._forces(drag, np.empty((0, 3)), pressure=False)
@@ -447,6 +467,8 @@ class GasCoupling:
         # the pressure-matrix factors the next step reuses: a resumed run goes on bit for bit (GasSolver)
         out.update({f"gas_solver/{k}": v for k, v in self.solver.checkpoint_arrays().items()})
         if self._paired_ready and self.exchange == "particle":
+            if self._device is not None:
+                self._device.fetch_kp(self._kp)
             out["coupling/kp"] = self._kp
         if self._paired_ready and self.exchange == "cell":
             out.update(zip(("coupling/cell_beta", "coupling/solids_u", "coupling/solids_v"), self._cell_inputs))
@@ -469,6 +491,8 @@ class GasCoupling:
         if self.exchange == "particle" and "coupling/kp" in arrays:
             self._kp = np.ascontiguousarray(arrays["coupling/kp"], dtype=float)
             self._paired_ready = True
+            if self._device is not None:
+                self._device.put_kp(self._kp)
         if self._inv_dbar.shape[0] > 0 and "coupling/inv_dbar" in arrays:
             self._inv_dbar = np.ascontiguousarray(arrays["coupling/inv_dbar"], dtype=float)
         if self.exchange == "cell" and "coupling/cell_beta" in arrays:

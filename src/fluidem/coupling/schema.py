@@ -90,6 +90,12 @@ class CouplingSection(BaseModel):
                           "volume deposited there as the particles' ∇p is interpolated, so that it loses exactly "
                           "the −V_p ∇p the particles gain (with pressure_gradient_force; particle and cell "
                           "exchange)")
+    gpu_exchange: Literal["device", "host"] = Field(
+        "device", description="with the particles on the GPU (device = 'gpu'): the particle side of the exchange "
+                              "(voidage map, drag, deposit, gas force) on the GPU where the coupling's options "
+                              "allow it (device; deposits summed with atomics, so a repeated run agrees to "
+                              "round-off), or on the host with the particles fetched once a gas step (host; a "
+                              "repeated run agrees bit for bit)")
     polydisperse: Literal["sauter_y2", "none"] | None = Field(
         None, description="drag in a mixture of sizes: 'sauter_y2', each particle takes y² times the law's drag "
                           "at the Sauter mean diameter D̄ of the solids around it, y = d/D̄ (DEM book 2012 "

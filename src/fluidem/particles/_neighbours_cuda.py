@@ -19,10 +19,12 @@ import math
 
 from numba import cuda, float64
 
+from .contact._dispatch_cuda import cached_kernel
+
 BOUNDS_THREADS = 256  # threads of a ``bounds`` block (a power of two: its tree reduction)
 
 
-@cuda.jit
+@cached_kernel
 def fill_int(a, value):
     """a[:] = value for a 1D int array."""
     i = cuda.grid(1)
@@ -30,7 +32,7 @@ def fill_int(a, value):
         a[i] = value
 
 
-@cuda.jit
+@cached_kernel
 def bounds(pos, radius, out):
     """Lower corner (out[0:3]), upper corner (out[3:6]) of the centres and the largest radius (out[6]).
 
@@ -93,7 +95,7 @@ def cell_of(x, y, z, lx, ly, lz, ix, iy, iz, nx, ny, nz):
     return kx, ky, kz
 
 
-@cuda.jit
+@cached_kernel
 def bin_cells(pos, lx, ly, lz, ix, iy, iz, nx, ny, nz, cell_count, members, overflow):
     """Each particle into its cell: ``members[c, :cell_count[c]]`` (any order; at most ``members.shape[1]``
     stored, overflow[0] = 1 when a cell holds more). ``cell_count`` must be zero on entry."""
@@ -109,7 +111,7 @@ def bin_cells(pos, lx, ly, lz, ix, iy, iz, nx, ny, nz, cell_count, members, over
         overflow[0] = 1
 
 
-@cuda.jit
+@cached_kernel
 def fill_rows(pos, radius, skin, lx, ly, lz, ix, iy, iz, nx, ny, nz, cell_count, members, nbr, count, longest):
     """Row i of the full list: every j ≠ i with |x_i − x_j|² < (a_i + a_j + skin)², sorted by j.
 
@@ -156,7 +158,7 @@ def fill_rows(pos, radius, skin, lx, ly, lz, ix, iy, iz, nx, ny, nz, cell_count,
         nbr[b + 1, i] = v
 
 
-@cuda.jit
+@cached_kernel
 def carry_history(old_nbr, old_count, old_hist, nbr, count, hist):
     """hist of the new list: the old row's spring where the partner was listed before, else zero (a pair's
     spring is kept relative to the row's particle, so no sign changes). Both lists' rows are sorted: one

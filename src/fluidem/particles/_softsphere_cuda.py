@@ -25,7 +25,7 @@ import math
 from numba import cuda
 
 from . import _softsphere_kernels as K
-from .contact._dispatch_cuda import contact_force, device_function
+from .contact._dispatch_cuda import cached_kernel, contact_force, device_function
 
 THREADS = 128  # threads per block of the per-particle kernels
 
@@ -39,7 +39,7 @@ def _row(table, a, b):
             table[a, b, 6], table[a, b, 7])
 
 
-@cuda.jit
+@cached_kernel
 def pair_and_wall_forces(pos, vel, omega, radius, mass, species, pp, nbr, count, hist, pw, wall_motion, wall_point0,
                          wall_normal, nw, wall_hist, wall_touch, gravity, ext_force, ext_damping, has_ext, dim2, t, dt,
                          update, force, torque):
@@ -159,7 +159,7 @@ def pair_and_wall_forces(pos, vel, omega, radius, mass, species, pp, nbr, count,
     torque[i, 2] = ai * cz
 
 
-@cuda.jit
+@cached_kernel
 def kick_drift(pos, vel, omega, force, torque, inv_mass, inv_inertia, dt, kicks, drift, ref_pos, limit2, moved):
     """``kicks`` half kicks v += F/m dt/2, ω += T/I dt/2 (each a separate addition, as the CPU's fused pass),
     then, if ``drift``, x += v dt and moved[0] = 1 where a particle is more than sqrt(limit2) from
@@ -209,7 +209,7 @@ def kick_drift(pos, vel, omega, force, torque, inv_mass, inv_inertia, dt, kicks,
             moved[0] = 1
 
 
-@cuda.jit
+@cached_kernel
 def all_finite(pos, bad):
     """bad[0] = 1 if any position is not finite."""
     i = cuda.grid(1)

@@ -249,6 +249,21 @@ class SoftSphereGPUEngine(SoftSphereEngine):
         self._valid.difference_update(STEPPED)
         self._list_cache = None
 
+    def device_arrays(self) -> dict:
+        """The particles' device arrays by name (``ON_DEVICE``: ``position``, ``velocity``, ``force``,
+        ``ext_force``, ...), current: host copies changed since the last step are sent first. For kernels that
+        read or write the particles where they live (the gas coupling's ``coupling.exchange_gpu``); one that
+        writes some of them says so with ``device_changed``."""
+        self._push()
+        return self._dev
+
+    def device_changed(self, names) -> None:
+        """Kernels other than the engine's have written these device arrays: their host copies are stale."""
+        names = set(names)
+        self._valid.difference_update(names)
+        if names & {"ext_force", "ext_damping"}:
+            self._has_ext = True
+
     def _derive_inverses(self) -> None:
         ParticleEngine._derive_inverses(self)
         if "inv_mass" in self._dev:

@@ -31,6 +31,26 @@ def device_function(kernel, **names):
     return cuda.jit(device=True)(func)
 
 
+try:  # numba-cuda keeps its own cache machinery: fluidem's one source stamp there too (``_numba_cache``)
+    from numba.cuda.core import caching as _cuda_caching
+except ImportError:  # numba's own numba.cuda caches through numba.core.caching, stamped at fluidem's import
+    _cuda_caching = None
+if _cuda_caching is not None:
+    from ..._numba_cache import install
+
+    install(caching=_cuda_caching)
+
+
+def cached_kernel(func):
+    """``func`` compiled as a CUDA kernel with numba-cuda's on-disk cache (``cuda.jit(cache=True)``, one file per
+    compute capability in ``__pycache__``, under fluidem's one source stamp: ``_numba_cache``); a plain
+    ``cuda.jit`` kernel where this numba.cuda refuses the option."""
+    try:
+        return cuda.jit(cache=True)(func)
+    except (TypeError, NotImplementedError):  # a numba.cuda without on-disk caching of kernels
+        return cuda.jit(func)
+
+
 def _device_laws() -> dict:
     """{CODE: device coefficients} of every registered force-based contact model."""
     return {code: device_function(kernel) for code, kernel in _dispatch._force_laws(False).items()}

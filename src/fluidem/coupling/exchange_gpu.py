@@ -1,0 +1,194 @@
+"""The particle side of the 2D gas coupling on the GPU, for a particle engine whose particles live there.
+
+``GasCoupling`` hands its per-particle stages to a ``DeviceExchange`` when the engine keeps its particles on
+the device (``SoftSphereGPUEngine``) and every option of the coupling has a device kernel (``refusals``):
+the voidage map's deposit (``_voidage_cuda``), each particle's drag coefficient and the face sums of the
+``particle`` exchange (``_paired_cuda.deposit``), and the gas force on each particle (``_paired_cuda.forces``,
+``forces_split``). Per gas step only cell and face arrays cross between host and device: the gas fields go
+to the device, the deposited sums come back, and the host finishes them with the CPU's own kernels
+(``_voidage_kernels.finish_map``, ``_paired_kernels._face_coefficients``, ``_face_voidage``). K_p stays on the
+device; ``fetch_kp`` brings it to the host for checkpoints and ``exchange_balance``.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import _paired_kernels as P
+from . import _voidage_kernels as VK
+from . import voidage as V
+from .voidage import SolidsMap
+
+
+def refusals(coupling) -> list[str]:
+    """What in the coupling of a GPU engine keeps its particle side on the host, one line each (empty: the
+    device exchange runs it)."""
+    opts, out = coupling.options, []
+    if opts.gpu_exchange == "host":
+        out.append("coupling.gpu_exchange = 'host'")
+    if coupling.exchange != "particle":
+        out.append(f"coupling.momentum_exchange = {coupling.exchange!r} (the device runs 'particle')")
+    if coupling.mapping.method != "centroid":
+        out.append(f"coupling.voidage.method = {coupling.mapping.method!r} (the device deposits by centre: "
+                   "'centroid')")
+    if coupling.polydisperse != "none":
+        out.append(f"coupling.polydisperse = {coupling.polydisperse!r} (the cells' Sauter mean diameter is mapped "
+                   "on the host)")
+    return out
+
+
+def device_exchange(coupling):
+    """A ``DeviceExchange`` for ``coupling`` where its engine keeps the particles on a GPU and ``refusals`` is
+    empty, else None (the host path; the log says why)."""
+    import logging
+
+    if not hasattr(coupling.engine, "device_arrays") or coupling.grid.dimensions != 2:
+        return None
+    why = refusals(coupling)
+    if why:
+        logging.getLogger(__name__).info("gas coupling: the particle side runs on the host (%s)", "; ".join(why))
+        return None
+    return DeviceExchange(coupling)
+
+
+class DeviceExchange:
+    """Device arrays and launches of the coupling's particle side (module docstring)."""
+
+    def __init__(self, coupling):
+        from numba import cuda
+
+        from . import _paired_cuda, _voidage_cuda
+
+        self._cuda, self._pc, self._vc = cuda, _paired_cuda, _voidage_cuda
+        self.coupling = coupling
+        engine = coupling.engine
+        self.engine = engine
+        gd = coupling.grid
+        self.n = engine.state.n
+        self.law = cuda.to_device(np.ascontiguousarray(coupling._law))
+        self._volume_of = None
+        self.volume = cuda.device_array(max(self.n, 1))
+        self.kp = cuda.to_device(np.zeros(max(self.n, 1)))
+        self.bad = cuda.to_device(np.zeros(1, dtype=np.int32))
+        self._cells = tuple(cuda.device_array(gd.shape) for _ in range(4))  # Σ V_p, count, Σ w v_x, Σ w v_y
+        self._host_cells = tuple(np.empty(gd.shape) for _ in range(4))
+        self._sums = {k: cuda.device_array(s) for k, s in (("AU", gd.u_shape), ("BU", gd.u_shape), ("AV", gd.v_shape),
+                                                           ("BV", gd.v_shape), ("KC", gd.shape), ("EU", gd.u_shape),
+                                                           ("EV", gd.v_shape))}
+        self._gas = {k: cuda.device_array(s) for k, s in (("u", gd.u_shape), ("v", gd.v_shape), ("voidage", gd.shape),
+                                                          ("rho", gd.shape), ("p", gd.shape))}
+
+    # ------------------------------------------------------------ helpers
+    def _blocks(self, threads: int) -> int:
+        return max(1, (self.n + threads - 1) // threads)
+
+    def _zero(self, a) -> None:
+        threads = self._vc.THREADS
+        self._vc.zero[max(1, (a.size + threads - 1) // threads), threads](a)
+
+    def _volume(self):
+        """V_p on the device, sent again when the coupling has computed new volumes (``_set_volumes``)."""
+        vol = self.coupling.volume
+        if vol is not self._volume_of:
+            self.volume.copy_to_device(np.ascontiguousarray(vol, dtype=float))
+            self._volume_of = vol
+        return self.volume
+
+    def _send(self, **fields) -> None:
+        for k, a in fields.items():
+            self._gas[k].copy_to_device(np.ascontiguousarray(a, dtype=float))
+
+    # ------------------------------------------------------------ stages
+    def map(self, mapping, grid) -> SolidsMap:
+        """particles → grid (``VoidageMapping.map_particles`` with method 'centroid'): the deposit on the device,
+        the rest on the host (``_voidage_kernels.finish_map``)."""
+        shape = grid.shape
+        eps, su, sv = np.empty(shape), np.empty(shape), np.empty(shape)
+        solids, count, wvx, wvy = self._host_cells
+        if self.n:
+            d = self.engine.device_arrays()
+            for a in self._cells:
+                self._zero(a)
+            threads = self._vc.THREADS
+            by_volume = mapping.velocity_weighting == "volume"
+            self._vc.centroid_deposit[self._blocks(threads), threads](
+                d["position"], d["velocity"], self._volume(), 1.0 / grid.dx, 1.0 / grid.dy, by_volume, *self._cells)
+            for dev, host in zip(self._cells, self._host_cells):
+                dev.copy_to_host(host)
+        else:
+            for a in self._host_cells:
+                a[...] = 0.0
+            by_volume = False
+        # as ``_voidage_kernels.deposit_solids``: the fraction over V_cell; the velocity weights are the counts
+        # (Hoomans 1996 eq. 50) or the volumes (Sun 2007 eq. 35)
+        wsum = solids.copy() if by_volume else count
+        frac = solids / V._norm(grid, mapping.method)
+        w = mapping.smoothing_width
+        rx, ry, steps = V._diffusion_steps(grid, w) if w > 0.0 else (0.0, 0.0, 0)
+        clipped = VK.finish_map(frac, wsum, wvx, wvy, rx, ry, steps, mapping.to_3d, V.EQ49_FACTOR,
+                                mapping.minimum_voidage, eps, su, sv)
+        return SolidsMap(eps, su, sv, int(clipped))
+
+    def deposit(self, voidage, gas) -> int:
+        """K_p on the device and the coupling's face sums, β and u_s of the faces, Σ K_p per cell and the
+        pressure voidage (``_paired_kernels.deposit``); returns the number of particles whose drag arguments
+        are out of range."""
+        cp, gd, s = self.coupling, self.coupling.grid, self._sums
+        for a in s.values():
+            self._zero(a)
+        self._zero_bad()
+        solids = bool(cp._pair_pressure)
+        if self.n:
+            d = self.engine.device_arrays()
+            self._send(voidage=voidage, rho=gas.rho, u=gas.u, v=gas.v)
+            g, threads = self._gas, self._pc.THREADS
+            self._pc.deposit[self._blocks(threads), threads](
+                self.law, d["position"], d["velocity"], d["radius"], self._volume(), g["u"], g["v"], g["voidage"],
+                g["rho"], float(cp.solver.props.viscosity), float(gd.dx), float(gd.dy),
+                float(cp.mapping.minimum_voidage), *cp._periodic, bool(cp._fold), self.kp, s["AU"], s["BU"], s["AV"],
+                s["BV"], s["KC"], solids, s["EU"], s["EV"], self.bad)
+        au, bu, av, bv = cp._faces
+        for k, host in (("AU", au), ("BU", bu), ("AV", av), ("BV", bv), ("KC", cp._kp_cells)):
+            s[k].copy_to_host(host)
+        VU, VV = cp._face_volumes
+        P._face_coefficients(au, bu, gd.cell_volume, VU, cp._fold, cp._face_beta[0], cp._face_solids[0])
+        P._face_coefficients(av, bv, gd.cell_volume, VV, cp._fold, cp._face_beta[1], cp._face_solids[1])
+        if solids:
+            eu, ev = cp._pressure_voidage
+            s["EU"].copy_to_host(eu)
+            s["EV"].copy_to_host(ev)
+            P._face_voidage(eu, VU, cp.mapping.minimum_voidage)
+            P._face_voidage(ev, VV, cp.mapping.minimum_voidage)
+        return int(self.bad.copy_to_host()[0])
+
+    def _zero_bad(self) -> None:
+        self.bad.copy_to_device(np.zeros(1, dtype=np.int32))
+
+    def set_forces(self, split: bool, pressure: bool) -> None:
+        """The gas force of this step's K_p on each particle into the engine's ``ext_force`` (and with ``split``
+        its ``ext_damping``), the engine's total force following (``_paired_kernels.particle_forces_split`` or
+        ``particle_forces``)."""
+        if self.n == 0:
+            return
+        cp, gd, gs = self.coupling, self.coupling.grid, self.coupling.state
+        d = self.engine.device_arrays()
+        self._send(u=gs.u, v=gs.v, p=gs.p)
+        g, threads = self._gas, self._pc.THREADS
+        args = (d["position"], d["velocity"], self._volume(), self.kp, g["u"], g["v"], g["p"], float(gd.dx),
+                float(gd.dy), *cp._periodic, bool(cp._fold), bool(pressure), bool(self.engine.dim2))
+        if split:
+            self._pc.forces_split[self._blocks(threads), threads](*args, d["ext_force"], d["ext_damping"], d["force"])
+            self.engine.device_changed(("ext_force", "ext_damping", "force"))
+        else:
+            self._pc.forces[self._blocks(threads), threads](*args, d["ext_force"], d["force"])
+            self.engine.device_changed(("ext_force", "force"))
+
+    # ------------------------------------------------------------ K_p on the host
+    def fetch_kp(self, out: np.ndarray) -> None:
+        """out ← K_p of the last deposit [kg/s], (N,)."""
+        if self.n:
+            self.kp.copy_to_host(out)
+
+    def put_kp(self, kp: np.ndarray) -> None:
+        """K_p from the host (a checkpoint) onto the device."""
+        if self.n:
+            self.kp.copy_to_device(np.ascontiguousarray(kp, dtype=float))

@@ -1,0 +1,161 @@
+"""The particle side of the gas coupling on the GPU against the CPU kernels it mirrors.
+
+``coupling._voidage_cuda.centroid_deposit`` against ``_voidage_kernels.deposit_solids``, and
+``coupling._paired_cuda`` (``deposit``, ``forces_split``, ``forces``) against ``_paired_kernels``, on a small
+random system: particles scattered over a 4 × 6 grid and a little beyond it, random gas fields, every
+registered drag law, folded and unfolded boundary faces, a periodic axis.
+
+Tolerances. Each particle's numbers (K_p, its force) come from the CPU's own source compiled for the device:
+1e-13 relative (on a GPU a multiply and an add may be fused into one rounding; the simulator gives the CPU's
+bits). The cell and face sums are added with atomics, in another order than the CPU's particle order: a sum of
+M terms can then differ by about M ε of the sum of their magnitudes; with at most 60 terms per node and
+ε = 2.2e-16, 1e-12 of the array's largest magnitude holds that with room.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from fluidem.coupling import _paired_kernels as P
+from fluidem.coupling import _voidage_kernels as VK
+from fluidem.coupling.drag import drag_laws
+from fluidem.particles.softsphere_gpu import cuda_available
+
+pytestmark = pytest.mark.skipif(not cuda_available(), reason="numba.cuda has no GPU or simulator in this process "
+                                "(tests/unit/test_gpu_device.py runs these under NUMBA_ENABLE_CUDASIM=1)")
+
+PER_PARTICLE_RTOL = 1e-13
+SUM_RTOL = 1e-12
+NX, NY, DX, DY = 4, 6, 0.01, 0.015
+MU = 1.8e-5
+
+
+def _system(seed=11, n=60):
+    """Particles (some outside the grid), random gas fields, one cell of negative gas density (drag arguments
+    out of range for the particles around it)."""
+    rng = np.random.default_rng(seed)
+    pos = np.zeros((n, 3))
+    pos[:, 0] = rng.uniform(-0.1 * DX, (NX + 0.1) * DX, n)
+    pos[:, 1] = rng.uniform(-0.1 * DY, (NY + 0.1) * DY, n)
+    pos[:, 2] = 2e-3
+    pos[:3, 0] = [0.0, NX * DX, 2 * DX]  # centres on faces
+    pos[:3, 1] = [DY, 0.5 * DY, NY * DY]
+    vel = rng.normal(0.0, 0.3, (n, 3))
+    radius = rng.uniform(0.8e-3, 1.2e-3, n)
+    volume = math.pi / 6.0 * (2.0 * radius) ** 3
+    gas = {"u": rng.normal(1.0, 0.5, (NX + 1, NY)), "v": rng.normal(1.5, 0.5, (NX, NY + 1)),
+           "voidage": rng.uniform(0.35, 1.05, (NX, NY)), "rho": rng.uniform(1.1, 1.3, (NX, NY)),
+           "p": rng.normal(0.0, 50.0, (NX, NY))}
+    gas["rho"][NX - 1, NY - 1] = -20.0
+    return pos, vel, radius, volume, gas
+
+
+def _dev(*arrays):
+    from numba import cuda
+
+    return [cuda.to_device(np.ascontiguousarray(a)) for a in arrays]
+
+
+def _sum_close(a, b):
+    scale = np.abs(a).max()
+    assert np.abs(a - b).max() <= SUM_RTOL * scale if scale > 0 else np.array_equal(a, b)
+
+
+@pytest.mark.parametrize("by_volume", [False, True])
+def test_centroid_deposit_matches_cpu(by_volume):
+    """Σ V_p, the velocity weights and the weighted velocities of each cell (Sun 2007 eqs 34-35, Hoomans 1996
+    eq. 50), centres outside the grid in its edge cells, centres on faces in the CPU's cell."""
+    from fluidem.coupling import _voidage_cuda as VC
+
+    pos, vel, radius, volume, _ = _system()
+    frac, wsum, wvx, wvy = (np.empty((NX, NY)) for _ in range(4))
+    norm = DX * DY * 4e-3
+    VK.deposit_solids(0, 1 if by_volume else 0, pos, radius, volume, vel, DX, DY, norm, frac, wsum, wvx, wvy)
+    cells = _dev(*(np.zeros((NX, NY)) for _ in range(4)))
+    d_pos, d_vel, d_vol = _dev(pos, vel, volume)
+    VC.centroid_deposit[1, VC.THREADS](d_pos, d_vel, d_vol, 1.0 / DX, 1.0 / DY, by_volume, *cells)
+    solids, count, gx, gy = (c.copy_to_host() for c in cells)
+    assert count.sum() == pos.shape[0]
+    _sum_close(frac, solids / norm)
+    _sum_close(wsum, solids if by_volume else count)
+    _sum_close(wvx, gx)
+    _sum_close(wvy, gy)
+
+
+def _cpu_deposit(law, pos, vel, radius, volume, gas, px, py, fold, solids):
+    vu = np.full((NX + 1, NY), 1.5 * DX * DY * 4e-3)
+    vv = np.full((NX, NY + 1), 1.5 * DX * DY * 4e-3)
+    out = {k: np.zeros(s) for k, s in (("AU", vu.shape), ("BU", vu.shape), ("AV", vv.shape), ("BV", vv.shape),
+                                       ("KC", (NX, NY)), ("bu", vu.shape), ("su", vu.shape), ("bv", vv.shape),
+                                       ("sv", vv.shape))}
+    eu, ev = (np.zeros(vu.shape), np.zeros(vv.shape)) if solids else (np.zeros((0, 0)), np.zeros((0, 0)))
+    kp = np.zeros(pos.shape[0])
+    bad = P.deposit(law, pos, vel, radius, volume, gas["u"], gas["v"], gas["voidage"], gas["rho"], MU,
+                    np.zeros((0, 0)), DX, DY, 0.3, px, py, kp, out["AU"], out["BU"], out["AV"], out["BV"], out["KC"],
+                    DX * DY * 4e-3, vu, vv, out["bu"], out["su"], out["bv"], out["sv"], fold, eu, ev)
+    # the pressure voidage before its last step (1 − E/V_f, clipped): the deposited E
+    return kp, out, (eu, ev, vu, vv), bad
+
+
+@pytest.mark.parametrize("law_name", drag_laws.names())
+@pytest.mark.parametrize("px,fold,solids", [(False, True, True), (True, False, True), (False, True, False)])
+def test_deposit_matches_cpu(law_name, px, fold, solids):
+    """K_p of each particle (every registered drag law), the face sums A_f, B_f, Σ K_p per cell and the particle
+    volume on the faces of the pressure term, against ``_paired_kernels.deposit``; out-of-range particles
+    counted and given NaN as there."""
+    from fluidem.coupling import _paired_cuda as PC
+
+    pos, vel, radius, volume, gas = _system()
+    law = drag_laws.get(law_name)().pack()
+    kp, out, (eu, ev, vu, vv), bad = _cpu_deposit(law, pos, vel, radius, volume, gas, px, False, fold, solids)
+    assert 0 < bad < pos.shape[0] // 4
+    sums = {k: np.zeros(s) for k, s in (("AU", vu.shape), ("BU", vu.shape), ("AV", vv.shape), ("BV", vv.shape),
+                                        ("KC", (NX, NY)), ("EU", vu.shape), ("EV", vv.shape))}
+    dsums = dict(zip(sums, _dev(*sums.values())))
+    d_kp, d_bad = _dev(np.zeros(pos.shape[0]), np.zeros(1, dtype=np.int32))
+    args = _dev(law, pos, vel, radius, volume, gas["u"], gas["v"], gas["voidage"], gas["rho"])
+    PC.deposit[1, PC.THREADS](*args, MU, DX, DY, 0.3, px, False, fold, d_kp, dsums["AU"], dsums["BU"], dsums["AV"],
+                              dsums["BV"], dsums["KC"], solids, dsums["EU"], dsums["EV"], d_bad)
+    got = {k: a.copy_to_host() for k, a in dsums.items()}
+    assert int(d_bad.copy_to_host()[0]) == bad
+    gkp = d_kp.copy_to_host()
+    assert np.array_equal(np.isnan(gkp), np.isnan(kp))
+    ok = ~np.isnan(kp)
+    assert np.all(np.abs(gkp[ok] - kp[ok]) <= PER_PARTICLE_RTOL * np.abs(kp[ok]))
+    for k in ("AU", "BU", "AV", "BV", "KC"):
+        _sum_close(out[k], got[k])
+    if solids:  # the CPU turned its sums into 1 − E/V_f (clipped at 0.3): the same on the device's sums
+        for e_cpu, e_dev, vf in ((eu, got["EU"], vu), (ev, got["EV"], vv)):
+            P._face_voidage(e_dev, vf, 0.3)
+            _sum_close(e_cpu, e_dev)
+
+
+@pytest.mark.parametrize("split", [True, False])
+@pytest.mark.parametrize("pressure,dim2", [(True, True), (False, False)])
+def test_particle_forces_match_cpu(split, pressure, dim2):
+    """The gas force of each particle from K_p (``forces_split`` / ``forces`` against
+    ``_paired_kernels.particle_forces_split`` / ``particle_forces``), the engine's total force following."""
+    from fluidem.coupling import _paired_cuda as PC
+
+    pos, vel, radius, volume, gas = _system(seed=5)
+    gas["rho"][:] = 1.2
+    law = drag_laws.get("gidaspow")().pack()
+    kp, *_ = _cpu_deposit(law, pos, vel, radius, volume, gas, False, True, True, True)
+    rng = np.random.default_rng(2)
+    ext, damp, total = rng.normal(size=(pos.shape[0], 3)), rng.uniform(size=pos.shape[0]), rng.normal(
+        size=(pos.shape[0], 3))
+    d_ext, d_damp, d_total = _dev(ext, damp, total)
+    args = _dev(pos, vel, volume, kp, gas["u"], gas["v"], gas["p"])
+    if split:
+        P.particle_forces_split(pos, vel, volume, kp, gas["u"], gas["v"], gas["p"], DX, DY, False, True, True,
+                                pressure, dim2, ext, damp, total)
+        PC.forces_split[1, PC.THREADS](*args, DX, DY, False, True, True, pressure, dim2, d_ext, d_damp, d_total)
+    else:
+        P.particle_forces(pos, vel, volume, kp, gas["u"], gas["v"], gas["p"], DX, DY, False, True, True, pressure,
+                          dim2, ext, total)
+        PC.forces[1, PC.THREADS](*args, DX, DY, False, True, True, pressure, dim2, d_ext, d_total)
+    for cpu, dev in ((ext, d_ext), (damp, d_damp), (total, d_total)):
+        got = dev.copy_to_host()
+        assert np.all(np.abs(got - cpu) <= PER_PARTICLE_RTOL * np.abs(cpu).max())

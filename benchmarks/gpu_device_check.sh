@@ -7,6 +7,10 @@
 #   tests.log       python3 -m pytest tests/gpu (forces, trajectories, checkpoints against the CPU engine)
 #   bench_gpu.json  bench_gpu.log   the GPU rows
 #   bench_cpu.json  bench_cpu.log   the CPU rows (the 100,000-sphere bed, one thread)
+#   coupled.txt     the coupled tsuji-jet bed (2400 spheres, 15 x 45 gas cells) over 0.2 s: the GPU engine with
+#                   the coupling's particle side on the device, the same with it on the host
+#                   (coupling.gpu_exchange = "host"), and the CPU engine on one core; wall time, start-up,
+#                   particle/gas split and warm rate from each run's summary.json (tsuji_*/, tsuji_*.log)
 #
 # Needs Python 3.12 with numpy, numba, numba-cuda, scipy, h5py and matplotlib (the device image has them)
 # plus pydantic and tomli-w. Where those two are missing and nothing can be downloaded, carry them as
@@ -18,7 +22,7 @@
 #       pydantic pydantic-core annotated-types typing-inspection tomli-w
 #
 # (one version of each; pydantic-core must be the one pydantic pins). The script installs .whl/*.whl into
-# /tmp/site when the folder exists. It takes about 6-8 minutes, most of it compiling the CPU kernels once
+# /tmp/site when the folder exists. It takes about 8-11 minutes, most of it compiling the CPU kernels once
 # and building the 1e7 bed; run it from the repository root:
 #
 #   bash benchmarks/gpu_device_check.sh
@@ -68,3 +72,27 @@ python3 -m fluidem bench --device gpu --sizes 100000,1000000,10000000 --json "$O
 
 python3 -m fluidem bench --sizes 100000 --threads 1 --no-gas --no-coupled --no-hard-sphere \
     --json "$OUT/bench_cpu.json" 2>&1 | tee "$OUT/bench_cpu.log"
+
+# the coupled bed: GPU engine with the device coupling, with the host coupling, CPU engine on one core
+for mode in device host; do
+    python3 -m fluidem run tsuji-jet --until 0.2 --device gpu --set coupling.gpu_exchange=$mode -q \
+        --out "$OUT/tsuji_gpu_$mode" > "$OUT/tsuji_gpu_$mode.log" 2>&1
+done
+python3 -m fluidem run tsuji-jet --until 0.2 --device cpu --threads 1 -q --out "$OUT/tsuji_cpu" \
+    > "$OUT/tsuji_cpu.log" 2>&1
+python3 - "$OUT" <<'EOF' 2>&1 | tee "$OUT/coupled.txt"
+import json, sys
+from pathlib import Path
+out = Path(sys.argv[1])
+print("tsuji-jet, 0.2 s simulated (1000 gas steps of 14 DEM steps, 2400 spheres)")
+print(f"{'run':<18}{'wall_s':>9}{'startup_s':>11}{'particle_s':>12}{'gas_s':>9}{'warm particle-steps/s':>24}")
+for name in ("tsuji_gpu_device", "tsuji_gpu_host", "tsuji_cpu"):
+    f = out / name / "summary.json"
+    if not f.exists():
+        print(f"{name:<18} no summary.json (see {name}.log)")
+        continue
+    s = json.loads(f.read_text())
+    nan = float("nan")
+    print(f"{name:<18}{s['wall_time_s']:>9.2f}{s.get('startup_s') or nan:>11.2f}{s['particle_time_s']:>12.2f}"
+          f"{s['gas_time_s']:>9.2f}{s.get('particle_steps_per_s') or nan:>24.4g}")
+EOF

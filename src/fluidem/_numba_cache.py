@@ -26,6 +26,7 @@ ROOT = Path(__file__).resolve().parent
 _MARK = "_fluidem_package_stamp"
 
 
+_CUDA_MODULE = re.compile(r"^from numba import (?:[\w ,]*\b)?cuda\b", re.MULTILINE)  # a module of CUDA kernels
 _FROM_IMPORT = re.compile(r"^[ \t]*from[ \t]+(\.+)([\w.]*)[ \t]+import[ \t]+(\([^)]*\)|[^\n]*)", re.MULTILINE)
 
 
@@ -47,11 +48,12 @@ def _relative_imports(path: Path, text: str) -> list[Path]:
 
 def kernel_sources(root: Path = ROOT) -> list[Path]:
     """The files whose change can change compiled code: those defining Numba functions (``njit``, and the
-    CUDA kernels of ``cuda.jit``, cached on disk as the CPU's are), and the package modules they import from,
+    CUDA kernels and device functions of the modules importing ``numba.cuda`` at their top, cached on disk as the CPU's
+    are), and the package modules they import from,
     transitively (constants such as ``contact.base.N_SLOTS`` and
     the cell flags of ``gas.grid`` are frozen into the compiled code that reads them). Sorted."""
     texts = {p.resolve(): p.read_text(encoding="utf-8") for p in root.rglob("*.py")}
-    seen = {p for p, t in texts.items() if "njit" in t or "cuda.jit" in t}
+    seen = {p for p, t in texts.items() if "njit" in t or _CUDA_MODULE.search(t)}
     todo = list(seen)
     while todo:
         p = todo.pop()

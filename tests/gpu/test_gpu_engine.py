@@ -195,6 +195,8 @@ def test_coupled_run_matches_cpu(packing_case):
     assert _close(cpu.engine.ext_force, gpu.engine.ext_force, 1e-9) < 1e-9
     assert np.abs(gpu.engine.ext_force[:, 1]).max() > 0.1 * gpu.state.mass.max() * 9.81  # the gas carries weight
     np.testing.assert_allclose(gpu.gas.state.p, cpu.gas.state.p, rtol=1e-9, atol=1e-9 * np.abs(cpu.gas.state.p).max())
+    kp = cpu.gas.checkpoint_arrays()["coupling/kp"]  # K_p of the last gas step, fetched from the device
+    assert np.abs(gpu.gas.checkpoint_arrays()["coupling/kp"] - kp).max() <= 1e-9 * np.abs(kp).max()
     on_device = gpu.gas._map()
     st, cg = gpu.state, gpu.gas
     on_host = cg.mapping.map_particles(cg.grid, st.position, st.radius, cg.volume, st.velocity)

@@ -18,6 +18,9 @@ def test_kernel_sources_are_the_compiled_files_and_what_they_import():
     for f in ("particles/_softsphere_kernels.py", "particles/_pair_kernels.py", "particles/contact/hertz_mindlin.py",
               "coupling/drag/gidaspow.py", "gas/_solver_kernels.py"):
         assert f in names, f"{f}: defines compiled functions"
+    for f in ("particles/_softsphere_cuda.py", "particles/_neighbours_cuda.py", "coupling/_paired_cuda.py",
+              "coupling/_voidage_cuda.py"):
+        assert f in names, f"{f}: CUDA kernels, cached on disk"
     for f in ("particles/contact/base.py", "gas/grid.py"):  # constants frozen into compiled code (N_SLOTS, cell flags)
         assert f in names, f"{f}: imported by kernel files"
     for f in ("simulation.py", "case.py", "cli.py", "io/snapshots.py", "plotting/figures/__init__.py",

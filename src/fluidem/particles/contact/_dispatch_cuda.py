@@ -33,7 +33,7 @@ def device_function(kernel, **names):
 
 try:  # numba-cuda keeps its own cache machinery: fluidem's one source stamp there too (``_numba_cache``)
     from numba.cuda.core import caching as _cuda_caching
-except ImportError:  # numba's own numba.cuda caches through numba.core.caching, stamped at fluidem's import
+except Exception:  # noqa: BLE001 - numba's own numba.cuda caches through numba.core.caching, stamped at import
     _cuda_caching = None
 if _cuda_caching is not None:
     from ..._numba_cache import install

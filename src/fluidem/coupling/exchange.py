@@ -44,7 +44,9 @@ and continue exactly.
 
 Every step above is one compiled call (``_voidage_kernels.map_solids``, ``_paired_kernels``,
 ``_exchange_kernels``), the drag law passed as its packed row; this module only hands
-them arrays.
+them arrays. With the particles on a GPU (``SoftSphereGPUEngine``) the per-particle parts of steps 1, 2
+and 4 run there (``exchange_gpu.DeviceExchange``, where the options allow it: ``exchange_gpu.refusals``), and
+only cell and face arrays cross between host and device.
 """
 from __future__ import annotations
 

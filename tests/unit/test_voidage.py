@@ -166,3 +166,21 @@ def test_mapping_options_are_validated():
     m = V.VoidageMapping(method="area", to_3d=True).map(g, [[0.01, 0.01, 0]], D)
     e2 = 1 - (math.pi * D**2 / 16) / 1e-4
     np.testing.assert_allclose(m.voidage, V.voidage_3d_from_2d(e2), rtol=1e-14)
+
+
+def test_area_drops_discs_wholly_outside_the_grid():
+    """A disc beyond a side of the grid, cut by a grid line out there, adds nothing: no cell inside gains area
+    (a negative index would wrap to the far side) and nothing lands past the array's end."""
+    from fluidem.coupling._voidage_kernels import area_deposit
+
+    nx, ny, dx, dy = 4, 5, 0.01, 0.01
+    r = 0.2 * dx
+    # centres on the grid lines x = (nx + 1) dx, x = -dx, y = (ny + 1) dy, y = -dy, inside the other range
+    px = np.array([(nx + 1) * dx, -dx, 0.5 * dx, 0.5 * dx])
+    py = np.array([0.5 * dy, 0.5 * dy, (ny + 1) * dy, -dy])
+    n = px.size
+    big = np.zeros((nx + 4, ny + 4))  # the map is big[2:-2, 2:-2]: a stray write lands in the margin
+    bvx, bvy = np.zeros_like(big), np.zeros_like(big)
+    area_deposit(px, py, np.full(n, r), np.ones(n), np.ones(n), np.ones(n), dx, dy,
+                 big[2:-2, 2:-2], bvx[2:-2, 2:-2], bvy[2:-2, 2:-2])
+    assert not big.any() and not bvx.any() and not bvy.any()

@@ -148,16 +148,16 @@ def area_deposit(px, py, radius, scale, vx, vy, dx, dy, out, out_vx, out_vy):
         if b0 == b1 and a1 == a0 + 1 and 0 <= b0 < ny:
             # cut by one vertical cell face only: a circular segment on either side (another third)
             low = full - _segment(a1 * dx - px[p], r)  # the part left of the face, in cell a0
-            if a0 >= 0:
+            if 0 <= a0 < nx:
                 _add(out, out_vx, out_vy, a0, b0, scale[p] * low, vx[p], vy[p])
-            if a1 < nx:
+            if 0 <= a1 < nx:
                 _add(out, out_vx, out_vy, a1, b0, scale[p] * (full - low), vx[p], vy[p])
             continue
         if a0 == a1 and b1 == b0 + 1 and 0 <= a0 < nx:
             low = full - _segment(b1 * dy - py[p], r)  # cut by one horizontal face: the part below it
-            if b0 >= 0:
+            if 0 <= b0 < ny:
                 _add(out, out_vx, out_vy, a0, b0, scale[p] * low, vx[p], vy[p])
-            if b1 < ny:
+            if 0 <= b1 < ny:
                 _add(out, out_vx, out_vy, a0, b1, scale[p] * (full - low), vx[p], vy[p])
             continue
         i0 = max(a0, 0)

@@ -7,6 +7,8 @@ is taken there (x_b = c + Rᵀ (x − d − c)), the element's closest point and
 turned back. ``shape_forces`` adds the contact forces into the soft-sphere engine's per-particle sums once
 per step; the elements each particle can reach are listed at each Verlet-list rebuild (``near_elements``),
 and each contact's tangential spring lives in a few history slots per particle keyed by element id.
+A free body (motion kind FREE) keeps its own state in its motion row and moves by the reaction of its
+contacts and gravity (``bodies_step``), with the particles' velocity-Verlet step.
 """
 import math
 
@@ -794,7 +796,7 @@ def body_mark(motion):
 def body_loads(motion, load):
     """Each free body's force and torque for its kicks from the particles' reaction ``load`` (about its centre
     of mass): F = (load + M g) on its free axes, T = load's torque where it rotates (about z only when
-    planar), both world frame (Wu & Guo 2012 eq 10 without the gas term)."""
+    planar), both world frame (Wu & Guo 2012 eqs 10a-b without the gas term)."""
     b = MOTION_COLS
     for k in range(motion.shape[0]):
         if int(motion[k, 0]) != FREE:
@@ -897,7 +899,7 @@ def bodies_kick_drift(shapes, dt):
 def bodies_step(shapes, dt, mode):
     """After the forces of a step: each free body's force and torque (``body_loads``), its closing half kick,
     and (mode 2, as the particles' fused pass) the next step's opening half kick and drift. Velocity Verlet as
-    for the particles (Wu & Guo 2012 eq 10: M dv/dt = Σ F_c + M g, I dω/dt = Σ T_c in the body frame)."""
+    for the particles (Wu & Guo 2012 eqs 10a-b: M dv/dt = Σ F_c + M g, I dω/dt = Σ T_c in the body frame)."""
     motion = shapes[3]
     load = shapes[18]
     body_loads(motion, load)

@@ -170,3 +170,26 @@ def test_a_2d_body_falls_and_spins_in_the_plane(make_engine):
     assert b["position"][:2] == pytest.approx([0.2 * t, -0.5 * G * t * t], abs=n * eps * 0.1)
     # the rotation: by 5 t about z
     assert 2.0 * math.atan2(b["quaternion"][3], b["quaternion"][0]) == pytest.approx(5.0 * t, rel=n * eps)
+
+
+def test_fixed_axes_and_fixed_rotation_hold(make_engine):
+    """A plate with fixed_axes = ["z"] under gravity keeps its height while it slides along x; a plate with
+    fixed_rotation = true struck off-centre by a particle takes its momentum but does not turn."""
+    eng = make_engine((1.0, 1.0, 1.0), D, contact=LAW, dt=1e-5, gravity=(0, 0, -G),
+                      walls=[_plate(mass=0.1, inertia=[1e-4, 2e-4, 3e-4], velocity=[0.3, 0.0, 0.0],
+                                    fixed_axes=["z"])])
+    eng.advance(5000)
+    b = eng.shapes.body_state(0)
+    assert b["position"][2] == 0.0 and b["velocity"][2] == 0.0 and b["force"][2] == 0.0
+    assert b["position"][0] == pytest.approx(0.3 * eng.time, rel=1e-12)
+
+    M = 10.0 * M_P
+    eng = make_engine((0.03, 0.0, -0.0025), D, (0.0, 0.0, 0.5), contact=LAW, dt=1e-5,
+                      walls=[_plate(mass=M, fixed_rotation=True)])
+    p0 = M_P * 0.5
+    eng.advance(5000)  # 0.05 s: the particle strikes the plate and flies back
+    b = eng.shapes.body_state(0)
+    assert np.array_equal(b["quaternion"], [1.0, 0.0, 0.0, 0.0])
+    assert np.array_equal(b["angular_velocity"], [0.0, 0.0, 0.0])
+    assert b["velocity"][2] > 0.0 and eng.state.velocity[0, 2] < 0.0  # the strike happened
+    assert M * b["velocity"][2] + eng.state.mass[0] * eng.state.velocity[0, 2] == pytest.approx(p0, rel=1e-12)

@@ -193,3 +193,12 @@ def test_fixed_axes_and_fixed_rotation_hold(make_engine):
     assert np.array_equal(b["angular_velocity"], [0.0, 0.0, 0.0])
     assert b["velocity"][2] > 0.0 and eng.state.velocity[0, 2] < 0.0  # the strike happened
     assert M * b["velocity"][2] + eng.state.mass[0] * eng.state.velocity[0, 2] == pytest.approx(p0, rel=1e-12)
+
+
+def test_a_body_lighter_than_a_particle_is_refused(make_case):
+    from fluidem.errors import CaseError
+    from fluidem.particles.softsphere import SoftSphereEngine
+
+    case = make_case((1.0, 1.0, 1.0), D, contact=LAW, walls=[_plate(mass=0.5 * M_P, fixed_rotation=True)])
+    with pytest.raises(CaseError, match=r"walls.0.motion.mass = .* kg \('plate'\): a free body must be heavier"):
+        SoftSphereEngine(case)

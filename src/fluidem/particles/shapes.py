@@ -129,6 +129,7 @@ class ShapeSet:
         and the broad-phase grid; the near lists are made at the first force evaluation."""
         st = engine.state
         n = st.n
+        self._check_body_masses(engine)
         self.skin = float(engine.skin)
         self.kind, self.owner, self.geom, box = self.element_tables()
         self.motion = self.motion_table(engine.gravity, engine.dim2)
@@ -149,6 +150,20 @@ class ShapeSet:
         self.ids_seen = st.ids.astype(np.int64).copy()
         self.ref_t = np.zeros(1)
         self.load = np.zeros((len(self.shapes), 6))
+
+    def _check_body_masses(self, engine) -> None:
+        """A free body must outweigh every particle: its contacts are those of the particle-wall law, whose
+        damping and contact time take the particle's mass alone (the body as a wall of infinite mass), which
+        holds for a body much heavier than the particles."""
+        st = engine.state
+        heaviest = float(st.mass.max()) if st.n else 0.0
+        names = [w.name for w in engine.case.walls]
+        for s in self.shapes:
+            if s.body is not None and s.body["mass"] <= heaviest:
+                raise CaseError(
+                    f"walls.{names.index(s.name)}.motion.mass = {s.body['mass']:.4g} kg ({s.name!r}): a free body "
+                    f"must be heavier than the heaviest particle ({heaviest:.4g} kg); its contacts take the "
+                    "particle-wall law with the particle's mass alone, as for a wall")
 
     def kernel_arrays(self) -> tuple:
         """The tuple ``_shape_kernels.shape_forces`` unpacks."""

@@ -121,26 +121,56 @@ class Placement(Strict):
 
 class Motion(Strict):
     """Prescribed wall motion: constant velocity, sinusoidal oscillation x = A sin(2π f t + φ), or (wall
-    shapes only) rotation at a constant rate about an axis."""
+    shapes only) rotation at a constant rate about an axis, a table of poses, or a free rigid body moved by
+    the particles' contact forces and gravity (Newton–Euler)."""
 
-    kind: Literal["constant_velocity", "oscillation", "rotation", "table"] = Field(
-        description="kind of motion; 'rotation' and 'table' (poses read from a CSV file) move the shapes "
+    kind: Literal["constant_velocity", "oscillation", "rotation", "table", "free"] = Field(
+        description="kind of motion; 'rotation', 'table' (poses read from a CSV file) and 'free' (a rigid body "
+        "moved by the contact forces of the particles and gravity; soft-sphere CPU engine) move the shapes "
         "(polyline, polygon, cylinder, mesh) only")
-    velocity: Vec3 | None = Field(None, description="[m/s] for constant_velocity")
+    velocity: Vec3 | None = Field(None, description="[m/s] for constant_velocity; free: the initial velocity of "
+                                                    "the centre of mass (default at rest)")
     amplitude: Vec3 | None = Field(None, description="[m] displacement amplitude vector for oscillation")
     frequency: float | None = Field(None, gt=0.0, description="[Hz] for oscillation")
     phase: float = Field(0.0, description="[rad]")
     axis_point: Vec3 | None = Field(None, description="[m] a point of the rotation axis (rotation)")
     axis: Vec3 | None = Field(None, description="direction of the rotation axis (rotation; any length but zero; "
                                                 "in 2D along z)")
-    angular_velocity: float | None = Field(None, description="[rad/s] rotation rate, right-handed about axis "
-                                                             "(rotation)")
+    angular_velocity: float | Vec3 | None = Field(
+        None, description="[rad/s] rotation: the rate, right-handed about axis (a number); free: the initial "
+        "angular velocity vector in the world frame (default at rest)")
     file: str | None = Field(None, description="table: CSV file with columns t [s], dx, dy, dz [m] (displacement) "
                                                "and angle [rad] (about axis through axis_point), interpolated "
                                                "linearly in t; a relative path is taken from the working directory")
+    mass: float | None = Field(None, gt=0.0, description="free: [kg] mass of the body (required)")
+    inertia: list[float] | list[list[float]] | None = Field(
+        None, description="free: [kg m^2] moment of inertia about the centre of mass in the body frame (the axes "
+        "of the case's geometry at rest): the 3 x 3 tensor (symmetric positive definite) or its principal moments "
+        "[Ixx, Iyy, Izz] about x, y, z; default for a closed mesh: that of a uniform solid of the given mass; "
+        "required for other shapes unless fixed_rotation")
+    centre_of_mass: Vec3 | None = Field(
+        None, description="free: [m] centre of mass in the case's coordinates at t = 0; default the shape's "
+        "reference point (the centroid of its corners; a closed mesh with no inertia given: its volume centroid)")
+    fixed_axes: list[Literal["x", "y", "z"]] = Field(
+        default_factory=list, description="free: world axes along which the centre of mass does not move (the "
+        "velocity and force components along them are held at zero); in 2D z is fixed always")
+    fixed_rotation: bool = Field(False, description="free: the body does not rotate (translation only; the "
+                                                    "torque is ignored)")
 
     @model_validator(mode="after")
     def _check(self):
+        free_keys = [k for k in ("mass", "inertia", "centre_of_mass") if getattr(self, k) is not None]
+        free_keys += ["fixed_axes"] if self.fixed_axes else []
+        free_keys += ["fixed_rotation"] if self.fixed_rotation else []
+        if self.kind != "free" and free_keys:
+            raise ValueError(f"motion.{free_keys[0]} is a key of a free body (motion.kind = 'free'), not of "
+                             f"motion.kind = {self.kind!r}")
+        if self.kind == "free":
+            self._check_free()
+        elif isinstance(self.angular_velocity, tuple):
+            raise ValueError(f"motion.angular_velocity = {list(self.angular_velocity)}: motion kind {self.kind!r} "
+                             "takes a rate [rad/s] about axis (a number); a vector is the initial angular velocity "
+                             "of a free body")
         if self.kind == "constant_velocity" and self.velocity is None:
             raise ValueError("motion kind 'constant_velocity' needs velocity")
         if self.kind == "oscillation" and (self.amplitude is None or self.frequency is None):
@@ -156,6 +186,55 @@ class Motion(Strict):
             if self.axis is not None and math.hypot(*self.axis) == 0:
                 raise ValueError(f"motion.axis = {list(self.axis)}: the rotation axis must not be zero")
         return self
+
+    def _check_free(self):
+        """A free body: mass given, inertia a symmetric positive definite 3 x 3 tensor or three positive
+        principal moments, no keys of the prescribed motions."""
+        if self.mass is None:
+            raise ValueError("motion kind 'free' needs mass [kg] (> 0)")
+        other = [k for k in ("amplitude", "frequency", "axis_point", "axis", "file") if getattr(self, k) is not None]
+        if other:
+            raise ValueError(f"motion.{other[0]} is not a key of a free body (motion.kind = 'free'); it takes mass, "
+                             "inertia, centre_of_mass, velocity, angular_velocity, fixed_axes and fixed_rotation")
+        if self.angular_velocity is not None and not isinstance(self.angular_velocity, tuple):
+            raise ValueError(f"motion.angular_velocity = {self.angular_velocity}: a free body takes the initial "
+                             "angular velocity as a vector [wx, wy, wz] [rad/s]")
+        if len(set(self.fixed_axes)) != len(self.fixed_axes):
+            raise ValueError(f"motion.fixed_axes = {self.fixed_axes} names an axis twice")
+        if self.fixed_rotation and self.angular_velocity is not None and any(self.angular_velocity):
+            raise ValueError(f"motion.angular_velocity = {list(self.angular_velocity)} with fixed_rotation = true: "
+                             "a body that does not rotate starts at rest (angular_velocity = [0, 0, 0])")
+        if self.inertia is not None:
+            inertia_tensor(self.inertia)
+
+
+def inertia_tensor(inertia) -> list[list[float]]:
+    """The 3 x 3 tensor of ``motion.inertia`` (principal moments on the diagonal); ValueError naming the key
+    unless it is symmetric positive definite."""
+    if all(isinstance(v, (int, float)) for v in inertia):
+        if len(inertia) != 3:
+            raise ValueError(f"motion.inertia = {inertia}: give three principal moments [Ixx, Iyy, Izz] or a 3 x 3 "
+                             "tensor [kg m^2]")
+        tensor = [[float(inertia[0]), 0.0, 0.0], [0.0, float(inertia[1]), 0.0], [0.0, 0.0, float(inertia[2])]]
+    else:
+        tensor = [list(map(float, row)) for row in inertia]
+        if len(tensor) != 3 or any(len(row) != 3 for row in tensor):
+            raise ValueError(f"motion.inertia = {inertia}: a tensor has 3 rows of 3 numbers [kg m^2]")
+    scale = max(abs(v) for row in tensor for v in row)
+    for i in range(3):
+        for j in range(i):
+            if abs(tensor[i][j] - tensor[j][i]) > 1e-12 * scale:
+                raise ValueError(f"motion.inertia = {inertia}: the tensor is not symmetric (row {i}, column {j} is "
+                                 f"{tensor[i][j]}, row {j}, column {i} is {tensor[j][i]})")
+    # positive definite: the leading principal minors are positive (Sylvester's criterion)
+    a = tensor
+    minors = (a[0][0], a[0][0] * a[1][1] - a[0][1] * a[1][0],
+              a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
+              + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]))
+    if not (scale > 0.0 and minors[0] > 0.0 and minors[1] > 1e-12 * scale**2 and minors[2] > 1e-12 * scale**3):
+        raise ValueError(f"motion.inertia = {inertia}: an inertia tensor must be positive definite (every "
+                         "principal moment > 0)")
+    return tensor
 
 
 class WallContact(ContactOverride):
@@ -242,7 +321,8 @@ class Wall(Strict):
                 raise ValueError(f"mesh wall {self.name!r} needs file (an STL file)")
         if self.periodic and self.kind not in ("plane", "box"):
             raise ValueError(f"{self.kind} wall {self.name!r}: periodic = {self.periodic} needs kind = 'box'")
-        if self.motion is not None and self.motion.kind in ("rotation", "table") and self.kind in ("plane", "box"):
+        if (self.motion is not None and self.motion.kind in ("rotation", "table", "free")
+                and self.kind in ("plane", "box")):
             raise ValueError(f"{self.kind} wall {self.name!r}: motion.kind = {self.motion.kind!r} moves shapes only "
                              f"(kind one of {list(SHAPE_KINDS)}); a plane or box moves by constant_velocity or "
                              "oscillation")
@@ -419,6 +499,11 @@ class Case(Strict):
                                  f"(walls.{names.index(name)}.name is {name!r} too)")
         self._check_periodic()
         for j, w in enumerate(self.walls):
+            if (w.kind in SHAPE_KINDS and w.motion is not None and w.motion.kind == "free"
+                    and self.particles.contact.instantaneous):
+                raise ValueError(f"walls.{j}.motion.kind = 'free': free bodies move with the soft-sphere engine only; "
+                                 f"particles.contact.model = {self.particles.contact.model!r} is the event-driven "
+                                 "hard-sphere engine")
             if w.kind in SHAPE_KINDS and self.particles.contact.instantaneous:
                 raise ValueError(f"walls.{j}.kind = {w.kind!r}: wall shapes take soft-sphere contact laws; "
                                  f"particles.contact.model = {self.particles.contact.model!r} is event-driven, "

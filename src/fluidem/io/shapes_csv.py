@@ -4,8 +4,11 @@
 Columns of ``shapes.csv``: ``time_s``, ``step``, then per shape ``<name>.fx_N``, ``fy_N``, ``fz_N`` (the
 force the particles exert on it), ``tx_Nm``, ``ty_Nm``, ``tz_Nm`` (their torque about the shape's reference
 point: its rotation axis point, else the centroid of its corners, moving with it), ``dx_m``, ``dy_m``,
-``dz_m`` (its displacement) and ``angle_rad`` (its rotation about its axis). The forces are those of the
-last DEM step before the row's time. ``shapes.stl`` holds every triangle (a segment as a flat triangle, a
+``dz_m`` (its displacement) and ``angle_rad`` (its rotation about its axis). A free body (``motion.kind =
+'free'``) has its torque about its centre of mass, its centre of mass's displacement, the angle of its rotation
+from rest, and more columns: ``vx_m/s``, ``vy_m/s``, ``vz_m/s`` (velocity of the centre of mass), ``wx_rad/s``,
+``wy_rad/s``, ``wz_rad/s`` (angular velocity, world frame) and ``qw``, ``qx``, ``qy``, ``qz`` (the unit
+quaternion of its rotation from rest). The forces are those of the last DEM step before the row's time. ``shapes.stl`` holds every triangle (a segment as a flat triangle, a
 cylinder as 64) where the case puts it; with the pose columns, ParaView's Transform filter moves it.
 """
 from __future__ import annotations
@@ -33,6 +36,14 @@ def shape_probes(sim) -> dict[str, float]:
         for j, col in enumerate(("dx_m", "dy_m", "dz_m")):
             row[f"{name}.{col}"] = float(d[j])
         row[f"{name}.angle_rad"] = float(angle)
+        if shapes.shapes[k].body is not None:
+            b = shapes.body_state(k)
+            for j, col in enumerate(("vx_m/s", "vy_m/s", "vz_m/s")):
+                row[f"{name}.{col}"] = float(b["velocity"][j])
+            for j, col in enumerate(("wx_rad/s", "wy_rad/s", "wz_rad/s")):
+                row[f"{name}.{col}"] = float(b["angular_velocity"][j])
+            for j, col in enumerate(("qw", "qx", "qy", "qz")):
+                row[f"{name}.{col}"] = float(b["quaternion"][j])
     return row
 
 

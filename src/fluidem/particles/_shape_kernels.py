@@ -7,6 +7,8 @@ is taken there (x_b = c + Rᵀ (x − d − c)), the element's closest point and
 turned back. ``shape_forces`` adds the contact forces into the soft-sphere engine's per-particle sums once
 per step; the elements each particle can reach are listed at each Verlet-list rebuild (``near_elements``),
 and each contact's tangential spring lives in a few history slots per particle keyed by element id.
+A free body (motion kind FREE) keeps its own state in its motion row and moves by the reaction of its
+contacts and gravity (``bodies_step``), with the particles' velocity-Verlet step.
 """
 import math
 
@@ -23,17 +25,27 @@ TRIANGLE, SEGMENT, CYLINDER = 1, 2, 3
 # feature of a closest point: a face (or a segment's or cylinder's interior), an edge, a vertex
 FACE, EDGE, VERTEX = 0, 1, 2
 # shape motion kinds (shapes.py builds the table; the first three are those of walls.py)
-STATIC, CONSTANT_VELOCITY, OSCILLATING, ROTATION, TABLE = 0, 1, 2, 3, 4
+STATIC, CONSTANT_VELOCITY, OSCILLATING, ROTATION, TABLE, FREE = 0, 1, 2, 3, 4, 5
 # columns of the (S, POSE_COLS) pose table: d (0:3), R row-major (3:12), d' (12:15), ω vector (15:18), c (18:21),
 # rotation angle θ (21)
 POSE_COLS = 22
 MOTION_COLS = 16  # motion row before a TABLE's poses (5 numbers each: t, dx, dy, dz, θ)
+# a FREE body's state, from MOTION_COLS on in its motion row (changed in place as it moves): displacement d of the
+# centre of mass (0:3), its velocity v (3:6), unit quaternion q = (w, x, y, z) of the rotation R (6:10), angular
+# momentum π in the principal axes (10:13), principal moments I_k (13:16), principal axes Q (16:25, row-major, the
+# columns in the body frame), mass M (25), 1/0 per world axis free/fixed (26:29), rotation free 1/0 (29), force F
+# (30:33) and torque T about the centre of mass (33:36) of the last step, d (36:39) and q (39:43) at the last near
+# list, gravity g (43:46), planar 1/0 (46: a 2D body, torque about z only)
+BODY_D, BODY_V, BODY_Q, BODY_PI, BODY_I, BODY_AXES, BODY_MASS = 0, 3, 6, 10, 13, 16, 25
+BODY_FREE, BODY_ROTATES, BODY_F, BODY_T, BODY_DREF, BODY_QREF, BODY_G, BODY_PLANAR = 26, 29, 30, 33, 36, 39, 43, 46
+BODY_COLS = 48
 MAX_CANDIDATES = 16  # touching elements of one particle considered at one step (more: the nearest are kept)
 # info counters (int64 array): 0 particles with near elements, 1 last reorder step seen, 2 near-list overflows,
 # 3 history-slot overflows, 4 shape-list rebuilds, 5 list capacity K needed at the last rebuild, 6 lists to be made
-# anew at the next call (set by the engine: a restore, a wider list)
+# anew at the next call (set by the engine: a restore, a wider list), 7 free bodies
 INFO_ACTIVE, INFO_REORDER, INFO_NEAR_OVERFLOW, INFO_SLOT_OVERFLOW, INFO_REBUILDS, INFO_NEEDED = 0, 1, 2, 3, 4, 5
 INFO_FORCE_REBUILD = 6
+INFO_BODIES = 7  # free bodies among the shapes (set up once)
 # grid (float64): origin (0:3), cell size (3), skin (4) of the broad phase
 
 
@@ -207,7 +219,7 @@ def pose(motion, t, out):
     constant velocity d = v t; oscillation d = A sin(2π f t + φ), d' = 2π f A cos(2π f t + φ); rotation
     R = Rodrigues' rotation by θ = ω t about u through c, surface velocity ω u × (x − c); table: d and θ
     interpolated linearly between the rows (velocities constant between them), held before the first
-    and after the last (at rest)."""
+    and after the last (at rest); a free body: its own state (``body_pose``, t not used)."""
     for k in range(motion.shape[0]):
         kind = int(motion[k, 0])
         for j in range(POSE_COLS):
@@ -259,6 +271,8 @@ def pose(motion, t, out):
             th = (1.0 - f) * motion[k, lo + 4] + f * motion[k, hi + 4]
             _rotate_about(out, k, motion[k, 9], motion[k, 10], motion[k, 11], th,
                           (motion[k, hi + 4] - motion[k, lo + 4]) * rate)
+        elif kind == FREE:
+            body_pose(motion, k, out)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -293,7 +307,8 @@ def rotate(P, k, x, y, z):
 @njit(cache=True, error_model="numpy")
 def moved_since(motion, reach, t0, t):
     """Upper bound over the shapes of how far a point of a shape moved between t0 and t [m]: |d(t) − d(t0)|
-    plus |θ(t) − θ(t0)| times the shape's largest distance from its rotation axis point (``reach``)."""
+    plus |θ(t) − θ(t0)| times the shape's largest distance from its rotation axis point (``reach``); a free
+    body: since its pose at the last near list (``body_moved``)."""
     moving = False
     for k in range(motion.shape[0]):
         moving |= int(motion[k, 0]) != STATIC
@@ -306,6 +321,9 @@ def moved_since(motion, reach, t0, t):
     worst = 0.0
     for k in range(motion.shape[0]):
         if int(motion[k, 0]) == STATIC:
+            continue
+        if int(motion[k, 0]) == FREE:  # its own pose against that at the last near list
+            worst = max(worst, body_moved(motion, k, reach[k]))
             continue
         dd = math.sqrt((p1[k, 0] - p0[k, 0]) ** 2 + (p1[k, 1] - p0[k, 1]) ** 2 + (p1[k, 2] - p0[k, 2]) ** 2)
         dd += abs(p1[k, 21] - p0[k, 21]) * reach[k]
@@ -541,6 +559,7 @@ def shape_forces(shapes, pos, ref_pos, vel, omega, radius, mass, species, ids, r
         near_elements(ref_pos, radius, skin, kind, owner, geom, P, grid, dims, cell_start, cell_elems, near_count,
                       near_elem, active, info)
         ref_t[0] = t
+        body_mark(motion)
         info[INFO_REBUILDS] += 1
         if update:
             _free_unlisted(n, near_count, near_elem, slot_elem, slot_hist)
@@ -706,3 +725,193 @@ def deepest_contacts(shapes, pos, radius, t, overlap, element):
             if cand_f[c, 6] > overlap[i]:
                 overlap[i] = cand_f[c, 6]
                 element[i] = cand_e[c]
+
+
+# ---------------------------------------------------------------- free bodies (Newton–Euler)
+@njit(cache=True, error_model="numpy", inline="always")
+def _quat_matrix(w, x, y, z):
+    """Rotation matrix (row-major, 9 values) of the unit quaternion (w, x, y, z): R v = q v q*."""
+    return (1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y),
+            2.0 * (x * y + w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - w * x),
+            2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y))
+
+
+@njit(cache=True, error_model="numpy")
+def body_pose(motion, k, out):
+    """Pose row k of free body k from its state (``BODY_*`` columns of its motion row): d, R of its quaternion,
+    d' = v, angular velocity ω = R Q diag(1/I_k) π (world), θ = the angle of R. The centre c (out[k, 18:21]) is
+    its centre of mass at rest."""
+    b = MOTION_COLS
+    for j in range(3):
+        out[k, j] = motion[k, b + BODY_D + j]
+        out[k, 12 + j] = motion[k, b + BODY_V + j]
+    q = b + BODY_Q
+    w, x, y, z = motion[k, q], motion[k, q + 1], motion[k, q + 2], motion[k, q + 3]
+    R = _quat_matrix(w, x, y, z)
+    for j in range(9):
+        out[k, 3 + j] = R[j]
+    # body-frame angular velocity Q diag(1/I) π, then into the world
+    a = b + BODY_AXES
+    wp0 = motion[k, b + BODY_PI] / motion[k, b + BODY_I]
+    wp1 = motion[k, b + BODY_PI + 1] / motion[k, b + BODY_I + 1]
+    wp2 = motion[k, b + BODY_PI + 2] / motion[k, b + BODY_I + 2]
+    wb0 = motion[k, a] * wp0 + motion[k, a + 1] * wp1 + motion[k, a + 2] * wp2
+    wb1 = motion[k, a + 3] * wp0 + motion[k, a + 4] * wp1 + motion[k, a + 5] * wp2
+    wb2 = motion[k, a + 6] * wp0 + motion[k, a + 7] * wp1 + motion[k, a + 8] * wp2
+    out[k, 15] = R[0] * wb0 + R[1] * wb1 + R[2] * wb2
+    out[k, 16] = R[3] * wb0 + R[4] * wb1 + R[5] * wb2
+    out[k, 17] = R[6] * wb0 + R[7] * wb1 + R[8] * wb2
+    out[k, 21] = 2.0 * math.atan2(math.sqrt(x * x + y * y + z * z), abs(w))
+
+
+@njit(cache=True, error_model="numpy")
+def body_moved(motion, k, reach):
+    """How far a point of free body k may have moved since its last near list [m]: |d − d_ref| plus the angle
+    of R_refᵀ R, 2 acos |q_ref · q|, times its reach."""
+    b = MOTION_COLS
+    dd = 0.0
+    dot = 0.0
+    for j in range(3):
+        dd += (motion[k, b + BODY_D + j] - motion[k, b + BODY_DREF + j]) ** 2
+    for j in range(4):
+        dot += motion[k, b + BODY_Q + j] * motion[k, b + BODY_QREF + j]
+    return math.sqrt(dd) + 2.0 * math.acos(min(abs(dot), 1.0)) * reach
+
+
+@njit(cache=True, error_model="numpy")
+def body_mark(motion):
+    """Keep each free body's pose as that of the near lists made now (``body_moved``)."""
+    if motion.shape[1] < MOTION_COLS + BODY_COLS:
+        return
+    b = MOTION_COLS
+    for k in range(motion.shape[0]):
+        if int(motion[k, 0]) == FREE:
+            for j in range(3):
+                motion[k, b + BODY_DREF + j] = motion[k, b + BODY_D + j]
+            for j in range(4):
+                motion[k, b + BODY_QREF + j] = motion[k, b + BODY_Q + j]
+
+
+@njit(cache=True, error_model="numpy")
+def body_loads(motion, load):
+    """Each free body's force and torque for its kicks from the particles' reaction ``load`` (about its centre
+    of mass): F = (load + M g) on its free axes, T = load's torque where it rotates (about z only when
+    planar), both world frame (Wu & Guo 2012 eqs 10a-b without the gas term)."""
+    b = MOTION_COLS
+    for k in range(motion.shape[0]):
+        if int(motion[k, 0]) != FREE:
+            continue
+        m = motion[k, b + BODY_MASS]
+        for j in range(3):
+            motion[k, b + BODY_F + j] = (load[k, j] + m * motion[k, b + BODY_G + j]) * motion[k, b + BODY_FREE + j]
+            motion[k, b + BODY_T + j] = load[k, 3 + j] * motion[k, b + BODY_ROTATES]
+        if motion[k, b + BODY_PLANAR] != 0.0:
+            motion[k, b + BODY_T] = 0.0
+            motion[k, b + BODY_T + 1] = 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def body_kick(motion, k, half):
+    """Half kick of free body k with its stored force and torque: v += F/M h, π += Qᵀ Rᵀ T h (the world torque
+    turned into the principal axes)."""
+    b = MOTION_COLS
+    im = 1.0 / motion[k, b + BODY_MASS]
+    for j in range(3):
+        motion[k, b + BODY_V + j] += half * motion[k, b + BODY_F + j] * im
+    if motion[k, b + BODY_ROTATES] == 0.0:
+        return
+    q = b + BODY_Q
+    R = _quat_matrix(motion[k, q], motion[k, q + 1], motion[k, q + 2], motion[k, q + 3])
+    tx, ty, tz = motion[k, b + BODY_T], motion[k, b + BODY_T + 1], motion[k, b + BODY_T + 2]
+    bx = R[0] * tx + R[3] * ty + R[6] * tz
+    by = R[1] * tx + R[4] * ty + R[7] * tz
+    bz = R[2] * tx + R[5] * ty + R[8] * tz
+    a = b + BODY_AXES
+    for j in range(3):
+        motion[k, b + BODY_PI + j] += half * (motion[k, a + j] * bx + motion[k, a + 3 + j] * by
+                                              + motion[k, a + 6 + j] * bz)
+
+
+@njit(cache=True, error_model="numpy")
+def _free_rotor(motion, k, ax, h):
+    """The exact flow over time h of the free rotor's part π_a² / (2 I_a): the body turns by φ = h π_a / I_a
+    about its principal axis a, q ← q ⊗ (cos φ/2, sin φ/2 Q e_a), and π turns the other way in the principal
+    frame, (π_i, π_j) ← (c π_i + s π_j, −s π_i + c π_j) with (a, i, j) cyclic (Miller et al. 2002, NO_SQUISH;
+    dπ/dt = π × ω, Euler's equations without torque)."""
+    b = MOTION_COLS
+    phi = h * motion[k, b + BODY_PI + ax] / motion[k, b + BODY_I + ax]
+    if phi == 0.0:
+        return
+    i = (ax + 1) % 3
+    j = (ax + 2) % 3
+    c = math.cos(phi)
+    s = math.sin(phi)
+    pi_i = motion[k, b + BODY_PI + i]
+    pi_j = motion[k, b + BODY_PI + j]
+    motion[k, b + BODY_PI + i] = c * pi_i + s * pi_j
+    motion[k, b + BODY_PI + j] = -s * pi_i + c * pi_j
+    ch = math.cos(0.5 * phi)
+    sh = math.sin(0.5 * phi)
+    a = b + BODY_AXES
+    ux, uy, uz = sh * motion[k, a + ax], sh * motion[k, a + 3 + ax], sh * motion[k, a + 6 + ax]
+    q = b + BODY_Q
+    w, x, y, z = motion[k, q], motion[k, q + 1], motion[k, q + 2], motion[k, q + 3]
+    motion[k, q] = w * ch - x * ux - y * uy - z * uz
+    motion[k, q + 1] = w * ux + ch * x + y * uz - z * uy
+    motion[k, q + 2] = w * uy + ch * y + z * ux - x * uz
+    motion[k, q + 3] = w * uz + ch * z + x * uy - y * ux
+
+
+@njit(cache=True, error_model="numpy")
+def body_drift(motion, k, dt):
+    """Drift of free body k: d += v dt, and the free rotor over dt split symmetrically into the exact rotations
+    about the principal axes, 1 (dt/2), 2 (dt/2), 3 (dt), 2 (dt/2), 1 (dt/2) (Miller et al. 2002, symplectic
+    and time-reversible; |L| is kept to round-off); q is normalised again."""
+    b = MOTION_COLS
+    for j in range(3):
+        motion[k, b + BODY_D + j] += dt * motion[k, b + BODY_V + j]
+    if motion[k, b + BODY_ROTATES] == 0.0:
+        return
+    half = 0.5 * dt
+    _free_rotor(motion, k, 0, half)
+    _free_rotor(motion, k, 1, half)
+    _free_rotor(motion, k, 2, dt)
+    _free_rotor(motion, k, 1, half)
+    _free_rotor(motion, k, 0, half)
+    q = b + BODY_Q
+    norm = math.sqrt(motion[k, q] ** 2 + motion[k, q + 1] ** 2 + motion[k, q + 2] ** 2 + motion[k, q + 3] ** 2)
+    for j in range(4):
+        motion[k, q + j] /= norm
+
+
+@njit(cache=True, error_model="numpy")
+def bodies_kick_drift(shapes, dt):
+    """The opening half kick and the drift of every free body (the start of an ``advance`` call, as
+    ``_kick_drift`` for the particles)."""
+    motion = shapes[3]
+    for k in range(motion.shape[0]):
+        if int(motion[k, 0]) == FREE:
+            body_kick(motion, k, 0.5 * dt)
+            body_drift(motion, k, dt)
+
+
+@njit(cache=True, error_model="numpy")
+def bodies_step(shapes, dt, mode):
+    """After the forces of a step: each free body's force and torque (``body_loads``), its closing half kick,
+    and (mode 2, as the particles' fused pass) the next step's opening half kick and drift. Velocity Verlet as
+    for the particles (Wu & Guo 2012 eqs 10a-b: M dv/dt = Σ F_c + M g, I dω/dt = Σ T_c in the body frame)."""
+    motion = shapes[3]
+    load = shapes[18]
+    body_loads(motion, load)
+    for k in range(motion.shape[0]):
+        if int(motion[k, 0]) == FREE:
+            body_kick(motion, k, 0.5 * dt)
+            if mode == 2:
+                body_kick(motion, k, 0.5 * dt)
+                body_drift(motion, k, dt)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def has_bodies(shapes):
+    """True if a shape is a free body (its motion row holds the body's state)."""
+    return shapes[13][INFO_BODIES] > 0

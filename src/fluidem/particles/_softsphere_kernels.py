@@ -23,7 +23,7 @@ from ._neighbours_kernels import (build_pairs, build_pairs_periodic, carry_histo
                                   contacts_first_periodic, renumber_pairs)
 from .contact._dispatch import contact_force, contact_force_full
 from .contact.base import N_SLOTS, SLOT_EXTENDED, SLOT_ROLLING_FRICTION
-from ._shape_kernels import shape_forces, shape_step
+from ._shape_kernels import bodies_kick_drift, bodies_step, body_loads, has_bodies, shape_forces, shape_step
 
 U = np.uintp  # unsigned array index: no wrap-around code (module docstring)
 assert N_SLOTS == 12, "_law reads the first 8 slots of a packed contact row, _law_full all 12"
@@ -764,6 +764,8 @@ def compute_forces(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, 
                 period)
     shape_forces(shapes, pos, pos, vel, omega, radius, mass, species, species, True, -1, t, dt, update, flat, sum_f,
                  sum_c)
+    if has_bodies(shapes):  # the free bodies' force and torque for their first half kick
+        body_loads(shapes[3], shapes[18])
     near_count, near_wall = all_walls(pos.shape[0], wall_normal.shape[0])
     # has_ext and mode as run-time values, as advance passes them: a constant argument is a literal type to
     # Numba, which would compile gather_forces once more for it (and with it all it calls)
@@ -810,7 +812,8 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
     corner; ``image`` (N, 3) int64 the image counts, updated as particles wrap. With a periodic axis the
     list is ``build_pairs_periodic``'s and pair offsets are taken by nearest image.
     ``shapes``: the wall shapes' arrays (``shapes.ShapeSet.kernel_arrays``), their forces added once a step
-    (``_shape_kernels.shape_step``; nothing without shapes).
+    (``_shape_kernels.shape_step``; nothing without shapes); free bodies among them take the same half kicks and
+    drift as the particles (``bodies_kick_drift`` at the start, ``bodies_step`` after each step's forces).
     """
     per = (period[0] != 0.0) | (period[1] != 0.0) | (period[2] != 0.0)
     limit2 = (0.5 * skin) ** 2
@@ -825,6 +828,9 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
     wall_axis = wall_axes(wall_normal)
     has_ext = any_nonzero(ext_force, ext_damping)
     moved = _kick_drift(pos, vel, omega, force, torque, inv_mass, inv_inertia, dt, ref_pos, limit2)
+    bodies = has_bodies(shapes)
+    if bodies:
+        bodies_kick_drift(shapes, dt)
     block = thread_blocks(row_start, slab_start, slab_members, nthreads)
     first = slab_start[block]
     work = make_work(pp, row_start, hist, slab_start, slab_members, nthreads)
@@ -863,4 +869,6 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
                               wall_axis, wall_hist, wall_touch, near_count, near_wall, gravity, ext_force, ext_damping,
                               has_ext, dim2, sum_f, sum_c, t, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2,
                               first, flat)
+        if bodies:  # the free bodies' kicks and drift, as the particles' in gather_forces
+            bodies_step(shapes, dt, mode)
     return row_start, partner, hist, slab_start, slab_members, rebuilds, last_reorder, reorders, combined

@@ -34,6 +34,7 @@ class Shape:
     centre: np.ndarray  # (3,) reference point: rotation axis point, else the centroid of the corners
     reach: float  # largest distance of a point of the shape from centre [m]
     table: np.ndarray | None = None  # (T, 5) poses t, dx, dy, dz, θ of a table motion
+    body: dict | None = None  # a free body: mass, inertia (3, 3) about centre, velocity, angular_velocity, free axes
 
 
 @dataclass
@@ -58,18 +59,26 @@ class ShapeSet:
         box = np.ascontiguousarray(np.concatenate([s.box for s in self.shapes]))
         return kind, owner, geom, box
 
-    def motion_table(self) -> np.ndarray:
-        """(S, MOTION_COLS + 5 T) float64: kind, v or A (1:4), f (4), φ (5), centre c (6:9), unit axis (9:12),
-        ω (12), table rows (13), then the rows t, dx, dy, dz, θ of a table motion (T: the longest table)."""
+    def motion_table(self, gravity=(0.0, 0.0, 0.0), dim2: bool = False) -> np.ndarray:
+        """(S, MOTION_COLS + max(5 T, BODY_COLS)) float64: kind, v or A (1:4), f (4), φ (5), centre c (6:9), unit
+        axis (9:12), ω (12), table rows (13), then the rows t, dx, dy, dz, θ of a table motion (T: the longest
+        table), or a free body's state (``_shape_kernels.BODY_*``; ``gravity`` acts on it, ``dim2``: it moves
+        in the x-y plane and turns about z only)."""
         tables = [s.table for s in self.shapes]
         longest = max([len(t) for t in tables if t is not None], default=0)
-        out = np.zeros((len(self.shapes), S.MOTION_COLS + 5 * longest))
+        width = 5 * longest
+        if any(s.body is not None for s in self.shapes):
+            width = max(width, S.BODY_COLS)
+        out = np.zeros((len(self.shapes), S.MOTION_COLS + width))
         for k, s in enumerate(self.shapes):
             m = s.source.motion
             out[k, 6:9] = s.centre
             out[k, 9:12] = (0.0, 0.0, 1.0)
             if m is None:
                 out[k, 0] = S.STATIC
+            elif m.kind == "free":
+                out[k, 0] = S.FREE
+                out[k, S.MOTION_COLS:S.MOTION_COLS + S.BODY_COLS] = _body_row(s.body, gravity, dim2)
             elif m.kind == "constant_velocity":
                 out[k, 0] = S.CONSTANT_VELOCITY
                 out[k, 1:4] = m.velocity
@@ -120,9 +129,10 @@ class ShapeSet:
         and the broad-phase grid; the near lists are made at the first force evaluation."""
         st = engine.state
         n = st.n
+        self._check_body_masses(engine)
         self.skin = float(engine.skin)
         self.kind, self.owner, self.geom, box = self.element_tables()
-        self.motion = self.motion_table()
+        self.motion = self.motion_table(engine.gravity, engine.dim2)
         self.reach = np.array([s.reach for s in self.shapes], float)
         self.table = np.ascontiguousarray(engine.shape_table)
         # the largest particle there or to come from an inlet (the broad-phase cells must reach it)
@@ -134,11 +144,26 @@ class ShapeSet:
         self.active = np.zeros(n, np.int64)
         self.info = np.zeros(8, np.int64)
         self.info[S.INFO_REORDER] = engine.last_reorder
+        self.info[S.INFO_BODIES] = sum(s.body is not None for s in self.shapes)
         self.slot_elem = np.full((n, HISTORY_SLOTS if len(self.kind) else 0), -1, np.int64)
         self.slot_hist = np.zeros((n, self.slot_elem.shape[1], 3))
         self.ids_seen = st.ids.astype(np.int64).copy()
         self.ref_t = np.zeros(1)
         self.load = np.zeros((len(self.shapes), 6))
+
+    def _check_body_masses(self, engine) -> None:
+        """A free body must outweigh every particle: its contacts are those of the particle-wall law, whose
+        damping and contact time take the particle's mass alone (the body as a wall of infinite mass), which
+        holds for a body much heavier than the particles."""
+        st = engine.state
+        heaviest = float(st.mass.max()) if st.n else 0.0
+        names = [w.name for w in engine.case.walls]
+        for s in self.shapes:
+            if s.body is not None and s.body["mass"] <= heaviest:
+                raise CaseError(
+                    f"walls.{names.index(s.name)}.motion.mass = {s.body['mass']:.4g} kg ({s.name!r}): a free body "
+                    f"must be heavier than the heaviest particle ({heaviest:.4g} kg); its contacts take the "
+                    "particle-wall law with the particle's mass alone, as for a wall")
 
     def kernel_arrays(self) -> tuple:
         """The tuple ``_shape_kernels.shape_forces`` unpacks."""
@@ -174,18 +199,51 @@ class ShapeSet:
         self.info[S.INFO_FORCE_REBUILD] = 1
 
     def checkpoint_arrays(self) -> dict[str, np.ndarray]:
-        return {"engine/shape_slot_elem": self.slot_elem, "engine/shape_slot_hist": self.slot_hist,
-                "engine/shape_ids_seen": self.ids_seen, "engine/shape_info": self.info}
+        out = {"engine/shape_slot_elem": self.slot_elem, "engine/shape_slot_hist": self.slot_hist,
+               "engine/shape_ids_seen": self.ids_seen, "engine/shape_info": self.info}
+        if self.has_bodies:
+            out["engine/shape_bodies"] = self.motion[:, S.MOTION_COLS:S.MOTION_COLS + S.BODY_COLS]
+        return out
 
     def restore(self, arrays: dict[str, np.ndarray]) -> None:
         for k in ("slot_elem", "slot_hist", "ids_seen", "info"):
             key = f"engine/shape_{k}"
             if key in arrays:
                 getattr(self, k)[...] = arrays[key]
+        if self.has_bodies:
+            if "engine/shape_bodies" not in arrays:
+                raise CaseError("restart: the checkpoint holds no free-body state (engine/shape_bodies) for the "
+                                f"free bodies {self.body_names}; it was written by a case without them")
+            self.motion[:, S.MOTION_COLS:S.MOTION_COLS + S.BODY_COLS] = arrays["engine/shape_bodies"]
         self.info[S.INFO_FORCE_REBUILD] = 1  # near lists are derived: made anew from the restored positions
 
+    @property
+    def has_bodies(self) -> bool:
+        return any(s.body is not None for s in self.shapes)
+
+    @property
+    def body_names(self) -> list[str]:
+        return [s.name for s in self.shapes if s.body is not None]
+
+    def body_state(self, k: int) -> dict[str, np.ndarray]:
+        """Free body k's state: ``position`` of its centre of mass [m], ``velocity`` [m/s], ``quaternion``
+        (w, x, y, z) of its rotation from rest, ``angular_velocity`` (world) [rad/s], ``angular_momentum``
+        about its centre of mass (world) [kg m²/s], ``force`` [N] and ``torque`` [N m] of the last step
+        (contacts and gravity)."""
+        row = self.motion[k, S.MOTION_COLS:]
+        P = np.empty((len(self.shapes), S.POSE_COLS))
+        S.pose(self.motion, 0.0, P)
+        R = P[k, 3:12].reshape(3, 3)
+        Q = row[S.BODY_AXES:S.BODY_AXES + 9].reshape(3, 3)
+        pi = row[S.BODY_PI:S.BODY_PI + 3]
+        return {"position": self.shapes[k].centre + row[S.BODY_D:S.BODY_D + 3],
+                "velocity": row[S.BODY_V:S.BODY_V + 3].copy(), "quaternion": row[S.BODY_Q:S.BODY_Q + 4].copy(),
+                "angular_velocity": P[k, 15:18].copy(), "angular_momentum": R @ Q @ pi,
+                "force": row[S.BODY_F:S.BODY_F + 3].copy(), "torque": row[S.BODY_T:S.BODY_T + 3].copy()}
+
     def displacement(self, k: int, t: float) -> tuple[np.ndarray, float]:
-        """Shape k's displacement d(t) (3,) [m] and rotation angle θ(t) [rad] (0 unless it rotates)."""
+        """Shape k's displacement d(t) (3,) [m] and rotation angle θ(t) [rad] (0 unless it rotates; a free
+        body: its present ones, the angle of its rotation from rest)."""
         P = np.empty((len(self.shapes), S.POSE_COLS))
         S.pose(self.motion, t, P)
         return P[k, 0:3].copy(), float(P[k, 21])
@@ -207,9 +265,12 @@ class ShapeSet:
 
     def world_triangles(self, t: float) -> np.ndarray:
         """(T, 3, 3) corners of every triangle and segment (a degenerate triangle) at time t, for output; a
-        cylinder is drawn as 32 quads of two triangles."""
+        cylinder is drawn as 32 quads of two triangles. Free bodies are drawn at rest (their pose is that of
+        t = 0, the case's geometry)."""
         P = np.empty((len(self.shapes), S.POSE_COLS))
-        S.pose(self.motion, t, P)
+        motion = self.motion.copy()
+        motion[motion[:, 0] == S.FREE, 0] = S.STATIC
+        S.pose(motion, t, P)
         out = []
         for k, s in enumerate(self.shapes):
             for e in range(len(s.kind)):
@@ -310,13 +371,121 @@ def build_shapes(case) -> ShapeSet:
         box = _boxes(kind, geom)
         corners = _corners(kind, geom)
         table = _pose_table(m, f"{where}.motion", dim2) if m is not None and m.kind == "table" else None
+        body = None
         if m is not None and m.kind in ("rotation", "table") and m.axis_point is not None:
             centre = np.array(m.axis_point, float)
+        elif m is not None and m.kind == "free":
+            centre, body = _free_body(wall, kind, geom, corners, f"{where}.motion", dim2)
         else:
             centre = corners.mean(axis=0)
         reach = float(np.max(np.linalg.norm(corners - centre, axis=1)))
-        out.shapes.append(Shape(wall.name, wall, kind, geom, box, centre, reach, table))
+        out.shapes.append(Shape(wall.name, wall, kind, geom, box, centre, reach, table, body))
     return out
+
+
+def _free_body(wall, kind, geom, corners, where, dim2):
+    """(centre of mass (3,), body dict) of a wall whose motion is 'free' (CaseError naming the key where the
+    body lacks what it needs)."""
+    m = wall.motion
+    from ..case import inertia_tensor
+
+    solid = None
+    if m.inertia is None and not m.fixed_rotation:
+        if wall.kind != "mesh":
+            raise CaseError(f"{where}.inertia: a free {wall.kind} needs its inertia [kg m^2] about the centre of mass "
+                            "(three principal moments or a 3 x 3 tensor), or fixed_rotation = true; only a closed "
+                            "mesh has a default (a uniform solid)")
+        solid = _solid(geom, where, wall.file)
+    if m.centre_of_mass is not None:
+        centre = np.array(m.centre_of_mass, float)
+    elif solid is not None:
+        centre = solid[1]
+    else:
+        centre = corners.mean(axis=0)
+    if m.inertia is not None:
+        tensor = np.array(inertia_tensor(m.inertia), float)
+    elif solid is not None:  # a uniform solid of the body's mass, about its centre of mass
+        volume, centroid, second = solid
+        r = centroid - centre
+        tensor = m.mass / volume * second + m.mass * (np.dot(r, r) * np.eye(3) - np.outer(r, r))
+    else:
+        tensor = np.eye(3)  # not used: the body does not rotate
+    velocity = np.array(m.velocity if m.velocity is not None else (0.0, 0.0, 0.0), float)
+    omega = np.array(m.angular_velocity if m.angular_velocity is not None else (0.0, 0.0, 0.0), float)
+    free = np.array([ax not in m.fixed_axes for ax in "xyz"], float)
+    if dim2:
+        if velocity[2] != 0.0:
+            raise CaseError(f"{where}.velocity = {list(m.velocity)}: in 2D a free body moves in the x-y plane (vz = 0)")
+        if omega[0] != 0.0 or omega[1] != 0.0:
+            raise CaseError(f"{where}.angular_velocity = {list(m.angular_velocity)}: in 2D a free body turns about "
+                            "z only ([0, 0, wz])")
+        if not m.fixed_rotation and (abs(tensor[0, 2]) > 0.0 or abs(tensor[1, 2]) > 0.0):
+            raise CaseError(f"{where}.inertia = {m.inertia}: in 2D z must be a principal axis of a free body that "
+                            "turns (Ixz = Iyz = 0); give its moment about z as the third principal moment")
+        free[2] = 0.0
+    for j, ax in enumerate("xyz"):
+        if free[j] == 0.0 and velocity[j] != 0.0 and ax in m.fixed_axes:
+            raise CaseError(f"{where}.velocity = {list(m.velocity)}: the velocity along the fixed axis {ax} "
+                            "(fixed_axes) must be 0")
+    return centre, {"mass": float(m.mass), "inertia": tensor, "velocity": velocity, "angular_velocity": omega,
+                    "free": free, "rotates": not m.fixed_rotation}
+
+
+def _solid(geom, where, file):
+    """(volume [m^3], volume centroid (3,), second moment tensor about the centroid per unit density (3, 3)) of
+    the solid a closed triangle mesh bounds, summed over the tetrahedra of its triangles with the origin:
+    C = V/20 (Σ v vᵀ + s sᵀ), s the sum of the four corners, I = tr(C) 1 − C (Tonon 2004); CaseError if the
+    mesh is not closed (the triangles' area vectors must sum to zero)."""
+    tri = geom.reshape(-1, 3, 3)
+    shift = tri.reshape(-1, 3).mean(axis=0)  # sums about a point inside, for round-off
+    a, b, c = tri[:, 0] - shift, tri[:, 1] - shift, tri[:, 2] - shift
+    area = 0.5 * np.cross(b - a, c - a)
+    total = float(np.sum(np.linalg.norm(area, axis=1)))
+    if np.linalg.norm(area.sum(axis=0)) > 1e-6 * total:
+        raise CaseError(f"{where}.inertia: not given, and the mesh {file!r} is not closed (its triangles' area "
+                        "vectors do not sum to zero) or not consistently oriented, so it bounds no solid; give "
+                        "inertia and centre_of_mass")
+    vol = np.einsum("ij,ij->i", a, np.cross(b, c)) / 6.0
+    volume = float(vol.sum())
+    if volume < 0.0:  # inward normals: the same solid
+        vol, volume = -vol, -volume
+    if volume <= 0.0:
+        raise CaseError(f"{where}.inertia: not given, and the mesh {file!r} bounds no volume; give inertia")
+    s = a + b + c
+    centroid = (vol[:, None] * s).sum(axis=0) / (4.0 * volume)
+    cov = np.einsum("t,tij->ij", vol / 20.0, np.einsum("ti,tj->tij", a, a) + np.einsum("ti,tj->tij", b, b)
+                    + np.einsum("ti,tj->tij", c, c) + np.einsum("ti,tj->tij", s, s))
+    cov -= volume * np.outer(centroid, centroid)  # about the centroid
+    return volume, centroid + shift, np.trace(cov) * np.eye(3) - cov
+
+
+def _body_row(body, gravity, dim2) -> np.ndarray:
+    """The BODY_COLS state columns of a free body at rest: d = 0, q = 1, π = I_k Qᵀ ω₀ in the principal axes
+    Q (a proper rotation; in 2D its third column is z exactly, so that the body turns about z only)."""
+    row = np.zeros(S.BODY_COLS)
+    tensor = body["inertia"]
+    if dim2:
+        moments2, axes2 = np.linalg.eigh(tensor[:2, :2])
+        moments = np.array([moments2[0], moments2[1], tensor[2, 2]])
+        axes = np.eye(3)
+        axes[:2, :2] = axes2
+    else:
+        moments, axes = np.linalg.eigh(tensor)
+    if np.linalg.det(axes) < 0.0:
+        axes[:, 0] = -axes[:, 0]
+    row[S.BODY_V:S.BODY_V + 3] = body["velocity"] * body["free"]
+    row[S.BODY_Q] = 1.0
+    row[S.BODY_QREF] = 1.0
+    if body["rotates"]:
+        row[S.BODY_PI:S.BODY_PI + 3] = moments * (axes.T @ body["angular_velocity"])
+    row[S.BODY_I:S.BODY_I + 3] = moments
+    row[S.BODY_AXES:S.BODY_AXES + 9] = axes.ravel()
+    row[S.BODY_MASS] = body["mass"]
+    row[S.BODY_FREE:S.BODY_FREE + 3] = body["free"]
+    row[S.BODY_ROTATES] = 1.0 if body["rotates"] else 0.0
+    row[S.BODY_G:S.BODY_G + 3] = gravity
+    row[S.BODY_PLANAR] = 1.0 if dim2 else 0.0
+    return row
 
 
 def _pose_table(motion, where, dim2):
@@ -441,6 +610,11 @@ def refusal(case) -> str | None:
     names = [f"walls.{i} ({w.name!r}) kind = {w.kind!r}" for i, w in enumerate(case.walls) if w.kind in SHAPE_KINDS]
     if not names:
         return None
-    return ", ".join(names) + " (wall shapes: the soft-sphere CPU engine only)"
+    free = [f"walls.{i} ({w.name!r}) motion.kind = 'free'" for i, w in enumerate(case.walls)
+            if w.kind in SHAPE_KINDS and w.motion is not None and w.motion.kind == "free"]
+    out = ", ".join(names) + " (wall shapes: the soft-sphere CPU engine only)"
+    if free:
+        out += "; free bodies " + ", ".join(free) + " (the soft-sphere CPU engine only)"
+    return out
 
 

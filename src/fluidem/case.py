@@ -24,6 +24,12 @@ from .particles.contact import contact_models
 
 Vec3 = tuple[float, float, float]
 
+# the rule for the file keys (placement.file, walls[].file, walls[].motion.file), said in each one's description
+RELATIVE_PATHS = ("a relative path is taken from the directory of the case file (a built-in case's: its "
+                  "package folder) and stored absolute in the run's case.toml, so that a resume works from any "
+                  "directory; from the working directory for a case given as data, not read from a file, and for "
+                  "a --set value")
+
 
 class Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, validate_assignment=True)
@@ -108,7 +114,8 @@ class Placement(Strict):
     spacing: float = Field(1.05, ge=1.0, description="lattice pitch in largest diameters [-]")
     perturbation: float = Field(0.02, ge=0.0, lt=0.5, description="lattice random shift, fraction of the diameter [-]")
     file: str | None = Field(None, description="CSV (x,y,z,diameter[,species][,vx,vy,vz]) or HDF5 with those "
-                                                "datasets: finite numbers, as many rows of each species as its count")
+                                                "datasets: finite numbers, as many rows of each species as its count; "
+                                                + RELATIVE_PATHS)
     seed: int = Field(12345, description="random seed of placement and size draws")
     velocity: Vec3 = Field((0.0, 0.0, 0.0), description="initial velocity of every particle [m/s]")
 
@@ -137,7 +144,7 @@ class Motion(Strict):
                                                              "(rotation)")
     file: str | None = Field(None, description="table: CSV file with columns t [s], dx, dy, dz [m] (displacement) "
                                                "and angle [rad] (about axis through axis_point), interpolated "
-                                               "linearly in t; a relative path is taken from the working directory")
+                                               "linearly in t; " + RELATIVE_PATHS)
 
     @model_validator(mode="after")
     def _check(self):
@@ -193,8 +200,7 @@ class Wall(Strict):
     radius: float | None = Field(None, gt=0.0, description="cylinder radius [m]")
     length: float | None = Field(None, gt=0.0, description="cylinder length along the axis from point [m]")
     inside: bool = Field(True, description="cylinder: particles inside it (a drum, a pipe), else outside (a roll)")
-    file: str | None = Field(None, description="mesh: STL file (ASCII or binary); a relative path is taken from "
-                                               "the working directory, as placement.file")
+    file: str | None = Field(None, description="mesh: STL file (ASCII or binary); " + RELATIVE_PATHS)
     scale: float = Field(1.0, gt=0.0, description="mesh: factor on the file's coordinates (e.g. 0.001 for mm)")
     offset: Vec3 = Field((0.0, 0.0, 0.0), description="mesh: [m] added to the scaled coordinates")
     motion: Motion | None = Field(None, description="prescribed motion; default at rest")
@@ -777,13 +783,31 @@ def read_case_data(name_or_path: str | Path) -> dict:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise CaseError(f"case file {path}: not valid TOML: {err}") from None
-    # a placement file named relative to the case file is found beside it
-    placement = data.get("particles", {}).get("placement", {}) if isinstance(data.get("particles"), dict) else {}
-    if isinstance(placement, dict) and isinstance(placement.get("file"), str):
-        f = Path(placement["file"])
-        if not f.is_absolute() and (path.parent / f).exists():
-            placement["file"] = str((path.parent / f).resolve())
+    resolve_case_paths(data, path.parent)
     return data
+
+
+def resolve_case_paths(data: dict, folder: str | Path) -> None:
+    """Make the relative file paths of raw case data (``particles.placement.file``, ``walls[].file``,
+    ``walls[].motion.file``) absolute, taken from ``folder`` (the case file's directory), so that the case finds
+    its files from any working directory and its ``case.toml`` in a run directory resumes from anywhere. Entries
+    that are not of the expected types are left for validation to name."""
+    folder = Path(folder)
+
+    def fix(node) -> None:
+        if isinstance(node, dict) and isinstance(node.get("file"), str) and node["file"]:
+            f = Path(node["file"]).expanduser()
+            node["file"] = str(f if f.is_absolute() else (folder / f).resolve())
+
+    particles = data.get("particles")
+    if isinstance(particles, dict):
+        fix(particles.get("placement"))
+    walls = data.get("walls")
+    if isinstance(walls, list):
+        for wall in walls:
+            fix(wall)
+            if isinstance(wall, dict):
+                fix(wall.get("motion"))
 
 
 def load_case(name_or_path: str | Path, overrides: dict[str, Any] | None = None) -> Case:

@@ -321,7 +321,9 @@ class Particles(Strict):
     species: list[Species] = Field(min_length=1, description="the kinds of particle")
     contact: ContactLaw = Field(description="particle–particle contact law, chosen by its model key")
     pairs: list[PairContact] = Field(default_factory=list, description="per species-pair overrides")
-    wall_contact: ContactLaw | None = Field(None, description="particle–wall law; default: the particle law")
+    wall_contact: ContactLaw | None = Field(None, description="particle–wall law, the model of contact (under "
+                                            "hertz_mindlin_jkr also hertz_mindlin: walls without adhesion, as "
+                                            "wall shapes need); default: the particle law")
     wall_pairs: list[WallPairContact] = Field(default_factory=list, description="per species(–wall) overrides")
     placement: Placement = Field(default_factory=Placement, description="initial positions and velocities")
     force_step: Literal["split", "hoomans"] = Field(
@@ -350,7 +352,14 @@ class Particles(Strict):
             if wp.species not in names:
                 raise ValueError(f"wall_pairs: species {wp.species!r} is not one of {sorted(names)}")
         if self.wall_contact is not None and type(self.wall_contact) is not type(self.contact):
-            raise ValueError("wall_contact must use the same model as contact")
+            # an adhesive law may meet the walls with the non-adhesive law it extends (JKR on Hertz–Mindlin):
+            # wall shapes take no adhesive law
+            base = type(self.wall_contact)
+            if not (self.contact.adhesive and not base.adhesive and isinstance(self.contact, base)):
+                raise ValueError(f"wall_contact.model = {self.wall_contact.model!r} and contact.model = "
+                                 f"{self.contact.model!r}: wall_contact must use the same model as contact (an "
+                                 "adhesive law such as hertz_mindlin_jkr may also take the law it extends, "
+                                 "hertz_mindlin, for non-adhesive walls)")
         if self.force_step == "hoomans" and not getattr(type(self.contact), "instantaneous", False):
             raise ValueError(f"force_step = 'hoomans' is the hard-sphere engine's (model = 'hard_sphere'); "
                              f"contact model {self.contact.model!r} integrates by velocity Verlet, a split step: "

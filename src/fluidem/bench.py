@@ -8,6 +8,11 @@ dense bed   The peer benchmark of shared/PEERS.md: monodisperse spheres d = 4 mm
             closed box, loaded settled and at rest. The settled beds are made once by
             this engine (lattice → settle → quench) and cached.
 pour        The built-in 2D ``pour`` case (500 particles), stepping from its start.
+hopper      The built-in ``hopper-3d`` case (3000 spheres of 4 mm, linear spring–dashpot, an STL cone of
+            192 triangles, an outlet plane) discharging: its first ``hopper_warmup`` seconds (the bed
+            collapses and the flow through the orifice sets in) are run untimed, then ``hopper_until``
+            seconds of the discharge are timed, outlet removals included; particle-steps per second
+            over the particles present at each step, next to the dense bed's rows of the same run.
 coupled     The built-in ``tsuji-jet-background`` case (Sun 2007: 2400 soft spheres, 15 × 45 gas cells,
             DT = 2e-4 s, 14 DEM sub-steps) including the gas, from its start for ``coupled_until``
             simulated seconds after a short warm-up that compiles: particle-steps per second,
@@ -249,6 +254,30 @@ def time_coupled(case_name: str = "tsuji-jet-background", until: float = 0.25, w
             "dem_neighbours_ms_per_gas_step": 1e3 * rebuilds * time_rebuild(sim.engine) / max(parts["gas_steps"], 1)}
 
 
+def time_hopper(case_name: str = "hopper-3d", warmup: float = 0.25, until: float = 0.05,
+                threads: int | None = None) -> dict:
+    """Particle-steps per second of a discharging hopper over ``until`` simulated seconds after ``warmup``
+    (see the module docstring); the count of each step is that of the particles present then."""
+    from .analysis.probes import contacts
+    from .case import load_case
+    from .simulation import Simulation
+
+    case = load_case(case_name)
+    if threads is not None:
+        case = case.with_overrides({"threads": threads})
+    sim = Simulation(case)
+    sim.run(until=warmup)  # compiles (or loads the caches) and sets the flow going; not timed
+    steps0, psteps0, n0 = sim.steps, sim.particle_steps, sim.state.n
+    t0 = time.perf_counter()
+    sim.run(until=warmup + until)
+    wall = time.perf_counter() - t0
+    steps, psteps = sim.steps - steps0, sim.particle_steps - psteps0
+    return {"problem": f"hopper {case_name}", "n_particles": int(round(psteps / max(steps, 1))), "threads": sim.threads,
+            "steps": steps, "wall_s": wall, "particle_steps_per_s": psteps / wall,
+            "contacts_per_particle": contacts(sim.engine)["coordination"], "n_at_start": n0, "n_at_end": sim.state.n,
+            "dt_s": sim.dt}
+
+
 def time_rebuild(eng, repeat: int = 5) -> float:
     """Seconds one Verlet-list rebuild (build and history carry-over) of a soft-sphere engine takes at its
     current positions (least of ``repeat``); the engine is left as it was. The DEM sub-steps of a gas step run
@@ -433,7 +462,8 @@ def run_gpu_bench(sizes=GPU_SIZES, steps: int = 0, as_json: str | None = None) -
 def run_bench(sizes=None, threads="1,2", steps: int = 0, as_json: str | None = None,
               gas: bool = True, gas_linear_solver: str = "auto", coupled: bool = True,
               coupled_until: float = 0.25, hard_sphere: bool = True, hard_warmup: float = 0.5,
-              hard_until: float = 0.1, device: str = "cpu") -> list[dict]:
+              hard_until: float = 0.1, device: str = "cpu", hopper: bool = True, hopper_warmup: float = 0.25,
+              hopper_until: float = 0.05) -> list[dict]:
     """Every problem of the module docstring on the CPU; ``device = "gpu"``: the dense-bed rows on the GPU
     only (``run_gpu_bench``; sizes default ``GPU_SIZES``)."""
     if device == "gpu":
@@ -465,6 +495,10 @@ def run_bench(sizes=None, threads="1,2", steps: int = 0, as_json: str | None = N
                      "wall_s": wall, "particle_steps_per_s": eng.state.n * nsteps / wall,
                      "contacts_per_particle": contacts(eng)["coordination"]})
         _print_row(rows[-1], header=not rows[:-1])
+    if hopper:
+        for t in threads:
+            rows.append(time_hopper("hopper-3d", warmup=hopper_warmup, until=hopper_until, threads=t))
+            _print_row(rows[-1], header=False)
     if coupled:
         print(f"\n{'coupled (gas included)':28s} {'N':>6s} {'threads':>7s} {'sim s':>6s} {'wall s':>7s} "
               f"{'particle-steps/s':>17s} {'ms/gas step':>11s} {'20 s takes':>10s}")

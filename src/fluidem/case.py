@@ -24,6 +24,12 @@ from .particles.contact import contact_models
 
 Vec3 = tuple[float, float, float]
 
+# the rule for the file keys (placement.file, walls[].file, walls[].motion.file), said in each one's description
+RELATIVE_PATHS = ("a relative path is taken from the directory of the case file (a built-in case's: its "
+                  "package folder) and stored absolute in the run's case.toml, so that a resume works from any "
+                  "directory; from the working directory for a case given as data, not read from a file, and for "
+                  "a --set value")
+
 
 class Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, validate_assignment=True)
@@ -108,7 +114,8 @@ class Placement(Strict):
     spacing: float = Field(1.05, ge=1.0, description="lattice pitch in largest diameters [-]")
     perturbation: float = Field(0.02, ge=0.0, lt=0.5, description="lattice random shift, fraction of the diameter [-]")
     file: str | None = Field(None, description="CSV (x,y,z,diameter[,species][,vx,vy,vz]) or HDF5 with those "
-                                                "datasets: finite numbers, as many rows of each species as its count")
+                                                "datasets: finite numbers, as many rows of each species as its count; "
+                                                + RELATIVE_PATHS)
     seed: int = Field(12345, description="random seed of placement and size draws")
     velocity: Vec3 = Field((0.0, 0.0, 0.0), description="initial velocity of every particle [m/s]")
 
@@ -141,7 +148,7 @@ class Motion(Strict):
         "angular velocity vector in the world frame (default at rest)")
     file: str | None = Field(None, description="table: CSV file with columns t [s], dx, dy, dz [m] (displacement) "
                                                "and angle [rad] (about axis through axis_point), interpolated "
-                                               "linearly in t; a relative path is taken from the working directory")
+                                               "linearly in t; " + RELATIVE_PATHS)
     mass: float | None = Field(None, gt=0.0, description="free: [kg] mass of the body (required)")
     inertia: list[float] | list[list[float]] | None = Field(
         None, description="free: [kg m^2] moment of inertia about the centre of mass in the body frame (the axes "
@@ -272,8 +279,7 @@ class Wall(Strict):
     radius: float | None = Field(None, gt=0.0, description="cylinder radius [m]")
     length: float | None = Field(None, gt=0.0, description="cylinder length along the axis from point [m]")
     inside: bool = Field(True, description="cylinder: particles inside it (a drum, a pipe), else outside (a roll)")
-    file: str | None = Field(None, description="mesh: STL file (ASCII or binary); a relative path is taken from "
-                                               "the working directory, as placement.file")
+    file: str | None = Field(None, description="mesh: STL file (ASCII or binary); " + RELATIVE_PATHS)
     scale: float = Field(1.0, gt=0.0, description="mesh: factor on the file's coordinates (e.g. 0.001 for mm)")
     offset: Vec3 = Field((0.0, 0.0, 0.0), description="mesh: [m] added to the scaled coordinates")
     motion: Motion | None = Field(None, description="prescribed motion; default at rest")
@@ -395,7 +401,9 @@ class Particles(Strict):
     species: list[Species] = Field(min_length=1, description="the kinds of particle")
     contact: ContactLaw = Field(description="particle–particle contact law, chosen by its model key")
     pairs: list[PairContact] = Field(default_factory=list, description="per species-pair overrides")
-    wall_contact: ContactLaw | None = Field(None, description="particle–wall law; default: the particle law")
+    wall_contact: ContactLaw | None = Field(None, description="particle–wall law, the model of contact (under "
+                                            "hertz_mindlin_jkr also hertz_mindlin: walls without adhesion, as "
+                                            "wall shapes need); default: the particle law")
     wall_pairs: list[WallPairContact] = Field(default_factory=list, description="per species(–wall) overrides")
     placement: Placement = Field(default_factory=Placement, description="initial positions and velocities")
     force_step: Literal["split", "hoomans"] = Field(
@@ -424,7 +432,14 @@ class Particles(Strict):
             if wp.species not in names:
                 raise ValueError(f"wall_pairs: species {wp.species!r} is not one of {sorted(names)}")
         if self.wall_contact is not None and type(self.wall_contact) is not type(self.contact):
-            raise ValueError("wall_contact must use the same model as contact")
+            # an adhesive law may meet the walls with the non-adhesive law it extends (JKR on Hertz–Mindlin):
+            # wall shapes take no adhesive law
+            base = type(self.wall_contact)
+            if not (self.contact.adhesive and not base.adhesive and isinstance(self.contact, base)):
+                raise ValueError(f"wall_contact.model = {self.wall_contact.model!r} and contact.model = "
+                                 f"{self.contact.model!r}: wall_contact must use the same model as contact (an "
+                                 "adhesive law such as hertz_mindlin_jkr may also take the law it extends, "
+                                 "hertz_mindlin, for non-adhesive walls)")
         if self.force_step == "hoomans" and not getattr(type(self.contact), "instantaneous", False):
             raise ValueError(f"force_step = 'hoomans' is the hard-sphere engine's (model = 'hard_sphere'); "
                              f"contact model {self.contact.model!r} integrates by velocity Verlet, a split step: "
@@ -862,13 +877,31 @@ def read_case_data(name_or_path: str | Path) -> dict:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise CaseError(f"case file {path}: not valid TOML: {err}") from None
-    # a placement file named relative to the case file is found beside it
-    placement = data.get("particles", {}).get("placement", {}) if isinstance(data.get("particles"), dict) else {}
-    if isinstance(placement, dict) and isinstance(placement.get("file"), str):
-        f = Path(placement["file"])
-        if not f.is_absolute() and (path.parent / f).exists():
-            placement["file"] = str((path.parent / f).resolve())
+    resolve_case_paths(data, path.parent)
     return data
+
+
+def resolve_case_paths(data: dict, folder: str | Path) -> None:
+    """Make the relative file paths of raw case data (``particles.placement.file``, ``walls[].file``,
+    ``walls[].motion.file``) absolute, taken from ``folder`` (the case file's directory), so that the case finds
+    its files from any working directory and its ``case.toml`` in a run directory resumes from anywhere. Entries
+    that are not of the expected types are left for validation to name."""
+    folder = Path(folder)
+
+    def fix(node) -> None:
+        if isinstance(node, dict) and isinstance(node.get("file"), str) and node["file"]:
+            f = Path(node["file"]).expanduser()
+            node["file"] = str(f if f.is_absolute() else (folder / f).resolve())
+
+    particles = data.get("particles")
+    if isinstance(particles, dict):
+        fix(particles.get("placement"))
+    walls = data.get("walls")
+    if isinstance(walls, list):
+        for wall in walls:
+            fix(wall)
+            if isinstance(wall, dict):
+                fix(wall.get("motion"))
 
 
 def load_case(name_or_path: str | Path, overrides: dict[str, Any] | None = None) -> Case:

@@ -126,9 +126,12 @@ def cmd_bench(args) -> int:
         raise CaseError(f"bench --coupled-until = {args.coupled_until!r}: must be a positive number of simulated seconds")
     if not args.hard_until > 0:
         raise CaseError(f"bench --hard-until = {args.hard_until!r}: must be a positive number of simulated seconds")
+    if not args.hopper_until > 0:
+        raise CaseError(f"bench --hopper-until = {args.hopper_until!r}: must be a positive number of simulated seconds")
     run_bench(sizes=args.sizes, threads=args.threads, steps=args.steps, as_json=args.json, gas=not args.no_gas,
               coupled=not args.no_coupled, coupled_until=args.coupled_until, hard_sphere=not args.no_hard_sphere,
-              hard_until=args.hard_until, device=args.device)
+              hard_until=args.hard_until, device=args.device, hopper=not args.no_hopper,
+              hopper_until=args.hopper_until)
     return 0
 
 
@@ -188,6 +191,9 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--no-hard-sphere", action="store_true", help="skip the hard-sphere hoomans-orifice timing")
     b.add_argument("--hard-until", type=float, default=0.1, metavar="T",
                    help="simulated seconds of the hoomans-orifice jet timed after its 0.5 s start-up (default 0.1)")
+    b.add_argument("--no-hopper", action="store_true", help="skip the discharging hopper-3d timing")
+    b.add_argument("--hopper-until", type=float, default=0.05, metavar="T",
+                   help="simulated seconds of the hopper-3d discharge timed after its 0.25 s start (default 0.05)")
     b.set_defaults(func=cmd_bench)
 
     from .cli_plot import add_commands

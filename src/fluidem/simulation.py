@@ -17,6 +17,7 @@ from . import _threads
 from .analysis import fluidised as F
 from .analysis import mixing as M
 from .analysis import probes as P
+from .analysis.repose import drum_of as repose_drum_of, repose_probes, summary_entries as repose_summary
 from .case import Case, validate_case
 from .checks import RunChecks, RunFailure
 from .errors import CaseError, CheckpointError
@@ -340,6 +341,9 @@ class Simulation:
             probes.append(lambda s: s.population.probes())
         if len(self.case.particles.species) > 1:  # per-species heights, segregation and mixing indices
             probes.append(M.mixing_probes)
+        drum = repose_drum_of(self.case)
+        if drum is not None:  # a rotating drum: the angle of repose of its free surface
+            probes.append(lambda s: repose_probes(s, drum))
         self.observers["probes"] = ProbeWriter(self.out_dir, probes, EveryTime(o.probe_interval or end / 1000))
         if len(getattr(self.engine, "shapes", ())):  # wall shapes: their loads and poses, shapes.csv
             self.observers["shapes"] = ShapeWriter(self.out_dir, EveryTime(o.probe_interval or end / 1000))
@@ -616,6 +620,9 @@ class Simulation:
                 out.update(F.time_averages(self.out_dir / "probes.csv", self.time))
         if self.population is not None:
             out.update(self.population.summary())
+        drum = repose_drum_of(self.case)
+        if drum is not None:
+            out.update(repose_summary(self, drum))
         out.update(self._summary_extra)
         return out
 

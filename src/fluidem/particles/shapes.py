@@ -493,7 +493,8 @@ def _pose_table(motion, where, dim2):
     path = Path(motion.file)
     if not path.is_file():
         raise CaseError(f"{where}.file = {motion.file!r}: no such file (a CSV of t, dx, dy, dz, angle; a "
-                        f"relative path is taken from the working directory {str(Path.cwd())!r})")
+                        "relative path is taken from the case file's directory, or from the working directory "
+                        f"{str(Path.cwd())!r} for a case not read from a file)")
     cols = ("t", "dx", "dy", "dz", "angle")
     try:
         data = np.genfromtxt(path, delimiter=",", names=True, dtype=float, encoding="utf-8")
@@ -563,7 +564,8 @@ def _mesh(wall, where):
     path = Path(wall.file)
     if not path.is_file():
         raise CaseError(f"{where}.file = {wall.file!r}: no such file (an STL file; a relative path is taken "
-                        f"from the working directory {str(Path.cwd())!r})")
+                        "from the case file's directory, or from the working directory "
+                        f"{str(Path.cwd())!r} for a case not read from a file)")
     try:
         from stl import mesh as stl_mesh
 

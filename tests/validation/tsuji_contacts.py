@@ -1,6 +1,6 @@
 """Where a jet bed's coordination number comes from: Sun 2007's N_c read several ways, and split by region.
 
-    python tests/validation/tsuji_contacts.py RUN [RUN ...] [--window A B] [--rest V]
+    python tests/validation/tsuji_contacts.py RUN [RUN ...] [--window A B] [--rest V] [--lag S]
 
 Each RUN is a run directory of ``fluidem run tsuji-jet --until 10`` (or another box bed with a linear
 spring-dashpot). For each run:
@@ -15,8 +15,8 @@ spring-dashpot). For each run:
    the bulk coordination number (share × mean; the rows of one split add up to the bulk value):
    the jet column (centre of the jet ± 2 cm) against the rest; particles at rest (speed below ``--rest``,
    0.05 m/s) against moving ones; particles of a dead zone (moved less than one radius over the next
-   ``--lag`` seconds, 1 s, within the window: a defluidised region that does not circulate) against the
-   others; and five columns of 3 cm across the bed.
+   ``--lag`` seconds, 1 s: a defluidised region that does not circulate; over the snapshots with one a lag
+   later in the window) against the others; and five columns of 3 cm across the bed.
 """
 import argparse
 import sys

@@ -13,7 +13,15 @@ minus the gas weight) is sampled every 5 ms.
 - u_mf, found as in the laboratory (Ergun-form fit of the fixed-bed branch meeting W/A,
   ``analysis.fluidised.minimum_fluidisation``), against Wen & Yu (1966) (required: within 10 %).
 
-Run: ``NUMBA_NUM_THREADS=1 nice -n 19 python3 -m pytest -m validation tests/validation/test_umf_sweep_3d.py -s``.
+Measured (one thread, 1 min 43 s of CPU, 9 min 15 s on a shared machine at a load of 7-10:
+``NUMBA_NUM_THREADS=1 nice -n 19 python3 -m pytest -m validation tests/validation/test_umf_sweep_3d.py -s``):
+W/A = 128.35 Pa, plateau 124.32 Pa (−3.1 %), u_mf = 0.1752 m/s against Wen–Yu 0.1885 m/s (−7.0 %). Δp / (W/A)
+by superficial velocity: 0.41 at 0.05-0.10 m/s, 0.70 at 0.10-0.15, 0.967 at 0.15-0.20, then 0.985, 0.949,
+0.981, 0.987, 0.965, 0.962 by 0.05 m/s up to 0.5 m/s. The plateau misses the required 3 % by 0.1 %. In the
+2D-grid sweep what the gas does not carry is the floor's share in the impacts of the slugging bed (2.5-3 %,
+``umf_budget.py``); here it was not measured. u_mf lies 7.0 % below Wen & Yu's where the 2D-grid sweep's walled
+60 × 10 d bed lies 7.3 % above it; a bed without walls packs denser (docs/gallery.md, the narrow sweep beds),
+presumably so here too (its voidage was not measured).
 """
 import math
 import time
@@ -72,10 +80,12 @@ def sweep():
 
 
 def test_pressure_drop_levels_off_at_bed_weight(sweep):
+    """Measured 124.32 Pa against W/A 128.35 Pa (−3.1 %: fails the 3 % by 0.1 %)."""
     weight, result = sweep
     assert abs(result["plateau_Pa"] / weight - 1.0) < 0.03
 
 
 def test_umf_matches_wen_yu(sweep):
+    """Measured 0.1752 m/s against Wen-Yu's 0.1885 m/s (−7.0 %)."""
     _, result = sweep
     assert abs(result["umf"] / wen_yu_umf(D, RHO_P, RHO, MU, G) - 1.0) < 0.10

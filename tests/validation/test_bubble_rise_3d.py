@@ -22,7 +22,7 @@ first in which the bubble is detached to the last before its top comes within on
 D_b is the mean over the same samples.
 
 Tolerance (stated): |u_b / (0.711 √(g D_b)) − 1| < 0.35. What sets it: the periodic column is only
-2–3 D_b wide (Clift & Grace's factor would be 0.75–0.85 for a walled column of that width; periodic images
+2–3 D_b wide (Clift & Grace's factor would be 0.73–0.81 for walled columns of those widths; periodic images
 slow a bubble less than walls), and D_b is read from cells of 2 d, so the volume of a bubble of ~5 cells
 across is uncertain by about a layer of cells (±30 % in V, ±10 % in D_b, ±5 % in √D_b); the bubble also
 grows and shrinks as it exchanges gas with the emulsion over a rise of a few diameters.

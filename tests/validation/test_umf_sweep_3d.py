@@ -20,7 +20,7 @@ by superficial velocity: 0.41 at 0.05-0.10 m/s, 0.70 at 0.10-0.15, 0.967 at 0.15
 0.981, 0.987, 0.965, 0.962 by 0.05 m/s up to 0.5 m/s. The plateau misses the required 3 % by 0.1 %. In the
 2D-grid sweep what the gas does not carry is the floor's share in the impacts of the slugging bed (2.5-3 %,
 ``umf_budget.py``); here it was not measured, but it is not the bed's width: the same sweep 24 d × 24 d
-(``SIDE = 24 * D`` above: 11,520 spheres, 6 × 15 × 6 cells; 4 min of CPU) gave a plateau of −3.04 % and u_mf
+(``SIDE = 24 * D`` below: 11,520 spheres, 6 × 15 × 6 cells; 4 min of CPU) gave a plateau of −3.04 % and u_mf
 0.1742 m/s (−7.6 %), and Δp / (W/A) by velocity within 0.01 of this bed's (0.969, 0.984, 0.951, 0.981, 0.984,
 0.971, 0.961 from 0.15 m/s up). u_mf lies 7.0 % below Wen & Yu's where the 2D-grid sweep's walled 60 × 10 d bed
 lies 7.3 % above it; a bed without walls packs denser (docs/gallery.md, the narrow sweep beds), presumably so

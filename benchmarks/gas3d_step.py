@@ -16,7 +16,8 @@ dt = min(1e-4 s, 0.5 h_min / 20 m/s).
 comma-separated list makes them the variants of each grid's rounds. Each round, for each grid, times every
 solver once on a fresh solver: ``--warmup`` steps are not timed, then ``advance`` alone for ``--seconds``
 (at least 3 steps). Printed per grid and solver: wall milliseconds per step (min, median, max over the
-rounds), the median CPU milliseconds, pressure corrections and GMRES iterations per step.
+rounds), the median CPU milliseconds and CPU microseconds per cell, pressure corrections and GMRES iterations
+per step.
 """
 from __future__ import annotations
 
@@ -118,11 +119,12 @@ def main(argv=None) -> int:
             w = rounds.stats(s)
             ex = rounds.extras[s][0]
             rows.append([grid, ex["cells"], ex["solver"], w["n"], w["min"], w["median"], w["max"],
-                         rounds.stats(s, "cpu_ms")["median"], rounds.stats(s, "iterations_per_step")["median"],
+                         rounds.stats(s, "cpu_ms")["median"], 1e3 * rounds.stats(s, "cpu_ms")["median"] / ex["cells"],
+                         rounds.stats(s, "iterations_per_step")["median"],
                          rounds.stats(s, "krylov_per_step")["median"], int(sum(e["steps"] for e in rounds.extras[s]))])
         ratio_lines += [f"{grid}: " + rounds.ratio_line(s, solvers[0]) for s in solvers[1:]]
     print(harness.format_table(["grid", "cells", "solver", "rounds", "wall ms/step min", "median", "max", "cpu ms/step",
-                                "it/step", "gmres/step", "steps"], rows))
+                                "cpu us/cell", "it/step", "gmres/step", "steps"], rows))
     for line in ratio_lines:
         print(line)
     harness.write_json(a.json, measurements, seconds=a.seconds, warmup=a.warmup, linear_solvers=solvers)

@@ -35,10 +35,13 @@ def equilibrium_overlap(law, mass, radius):
     return (mass * G / (4.0 / 3.0 * e_star * math.sqrt(radius))) ** (2.0 / 3.0)
 
 
-@pytest.mark.parametrize("model,dimensions", [("linear_spring_dashpot", 3), ("hertz_mindlin", 3),
-                                              ("linear_spring_dashpot", 2)])
-def test_rolling_sphere_stops_after_the_analytic_distance(make_engine, contact_law, model, dimensions):
-    law = contact_law(model, restitution=0.5, friction=0.5, rolling_friction=ROLLING)
+@pytest.mark.parametrize("model,dimensions,rolling_model", [
+    ("linear_spring_dashpot", 3, "cdt"), ("hertz_mindlin", 3, "cdt"), ("linear_spring_dashpot", 2, "cdt"),
+    ("linear_spring_dashpot", 3, "epsd"), ("hertz_mindlin", 3, "epsd"), ("linear_spring_dashpot", 2, "epsd")])
+def test_rolling_sphere_stops_after_the_analytic_distance(make_engine, contact_law, model, dimensions, rolling_model):
+    """cdt and epsd alike: the epsd spring reaches its limit μ_r R* F_n within a rotation of μ_r R* F_n / k_r
+    (k_r = k_t a², a wind-up of μ_r m g / k_t: 1e-5 of s here) and then holds it while the sphere rolls."""
+    law = contact_law(model, restitution=0.5, friction=0.5, rolling_friction=ROLLING, rolling_model=rolling_model)
     a = 0.5 * DIAMETER
     mass = DENSITY * math.pi * DIAMETER**3 / 6.0
     h = a - equilibrium_overlap(law, mass, a)

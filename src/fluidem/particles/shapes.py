@@ -18,6 +18,7 @@ import numpy as np
 from ..case import SHAPE_KINDS
 from ..errors import CaseError
 from . import _shape_kernels as S
+from .contact.base import uses_rolling_spring
 
 NEAR_CAPACITY = 16  # near elements per particle at first (widened when a list needs more)
 HISTORY_SLOTS = 6  # shape contacts per particle that keep a tangential spring
@@ -135,7 +136,8 @@ class ShapeSet:
         self.info = np.zeros(8, np.int64)
         self.info[S.INFO_REORDER] = engine.last_reorder
         self.slot_elem = np.full((n, HISTORY_SLOTS if len(self.kind) else 0), -1, np.int64)
-        self.slot_hist = np.zeros((n, self.slot_elem.shape[1], 3))
+        # an epsd law's rolling spring torque in columns 3-5 of a slot
+        self.slot_hist = np.zeros((n, self.slot_elem.shape[1], 6 if uses_rolling_spring(self.table) else 3))
         self.ids_seen = st.ids.astype(np.int64).copy()
         self.ref_t = np.zeros(1)
         self.load = np.zeros((len(self.shapes), 6))

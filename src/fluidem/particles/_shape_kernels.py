@@ -716,3 +716,30 @@ def deepest_contacts(shapes, pos, radius, t, overlap, element):
             if cand_f[c, 6] > overlap[i]:
                 overlap[i] = cand_f[c, 6]
                 element[i] = cand_e[c]
+
+
+@njit(cache=True, error_model="numpy")
+def contact_census(shapes, pos, radius, t, count, overlap, element):
+    """Per particle, its contacts with shape elements at time t (count (N,) int64, each feature once, as
+    ``shape_forces`` feels them), the largest overlap [m] (0 where none touches) and that element (−1: none),
+    over the near lists of the last ``shape_forces`` call (for the outputs: probes, run checks)."""
+    (kind, owner, geom, motion, reach, grid, dims, cell_start, cell_elems, table, near_count, near_elem, active,
+     info, slot_elem, slot_hist, ids_seen, ref_t, load) = shapes
+    count[:] = 0
+    overlap[:] = 0.0
+    element[:] = -1
+    if kind.shape[0] == 0:
+        return
+    P = np.empty((motion.shape[0], POSE_COLS))
+    pose(motion, t, P)
+    cand_e = np.empty(MAX_CANDIDATES, dtype=np.int64)
+    cand_f = np.empty((MAX_CANDIDATES, 8))
+    keep = np.zeros(MAX_CANDIDATES, dtype=np.bool_)
+    for q in range(info[INFO_ACTIVE]):
+        i = active[q]
+        m = particle_contacts(i, pos, radius, kind, owner, geom, P, near_count, near_elem, cand_e, cand_f, keep)
+        count[i] = m
+        for c in range(m):
+            if cand_f[c, 6] > overlap[i]:
+                overlap[i] = cand_f[c, 6]
+                element[i] = cand_e[c]

@@ -37,3 +37,15 @@ def test_history_columns(two_particles, rolling_model, width):
                         rolling_model=rolling_model, stiffness=1e4)
     assert eng.hist.shape[1] == width
     assert np.all(eng.hist[:, 3:] == 0.0)
+
+
+def test_rolling_spring_changes_sign_with_the_pair_owner():
+    """A pair listed under its other particle after a rebuild: the springs (tangential, columns 0-2, and rolling,
+    4-6) are kept relative to the owner and change sign; the adhesive column 3 is a scalar of the pair."""
+    from fluidem.particles._neighbours_kernels import carry_history
+
+    old_start, old_partner = np.array([0, 1, 1]), np.array([1], dtype=np.int32)  # pair (0, 1) owned by 0
+    old_hist = np.array([[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]])
+    new_start, new_partner = np.array([0, 0, 1]), np.array([0], dtype=np.int32)  # now owned by 1
+    hist = carry_history(old_start, old_partner, old_hist, new_start, new_partner)
+    np.testing.assert_array_equal(hist, [[-1.0, -2.0, -3.0, 4.0, -5.0, -6.0, -7.0]])

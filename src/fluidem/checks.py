@@ -262,10 +262,17 @@ class RunChecks:
             if eng.contact_forces:  # soft spheres; hard spheres collide without overlap
                 rel, i, j = largest_pair_overlap(st.position, st.radius, eng.row_start, eng.partner,
                                                  self.settings.max_overlap, eng.period)
+                wall = None
                 if sc.wall_rel > rel:
-                    rel, i, j = sc.wall_rel, sc.wall_i, -1
+                    rel, i, j, wall = sc.wall_rel, sc.wall_i, -1, eng.walls.names[sc.wall_w]
+                shapes = getattr(eng, "shapes", None)
+                if shapes is not None and len(shapes):  # wall shapes: the deepest overlap of a particle with one
+                    _, overlap, shape = shapes.contacts(st, eng.time)
+                    k = int(np.argmax(overlap / st.radius))
+                    if 0.5 * overlap[k] / st.radius[k] > rel:
+                        rel, i, j, wall = 0.5 * float(overlap[k] / st.radius[k]), k, -1, shapes.names[shape[k]]
                 if rel > self.settings.max_overlap:
-                    raise self._overlap(rel, i, j, sc.wall_w)
+                    raise self._overlap(rel, i, j, wall)
             supply = self._supply(sc)
             if kinetic_energy_jumped(sc.kinetic, self._ke_before, supply, self.settings.kinetic_energy_jump):
                 raise self._energy(sc.kinetic, supply)
@@ -341,11 +348,12 @@ class RunChecks:
         hints += self._cause_hints(k)
         return self._failure("domain", message, "; ".join(hints), k, value=excess + margin * d, limit=margin * d)
 
-    def _overlap(self, rel, i, j, w) -> RunFailure:
+    def _overlap(self, rel, i, j, wall) -> RunFailure:
+        """The overlap failure of particle i with particle j (>= 0) or with the wall named ``wall``."""
         st = self.engine.state
         limit = self.settings.max_overlap
         other = (f"particle {int(st.ids[j])} by {rel:.4g} of the smaller diameter" if j >= 0 else
-                 f"wall {self.engine.walls.names[w]!r} by {rel:.4g} of its diameter")
+                 f"wall {wall!r} by {rel:.4g} of its diameter")
         message = f"particle {int(st.ids[i])} at {self._where(i)} overlaps {other} (limit: checks.max_overlap = {limit:g})"
         speed = self._speed(i) if j < 0 else float(np.linalg.norm(st.velocity[i] - st.velocity[j]))
         hints = [(f"the contacts are too soft for the loads and impact speeds (relative speed now {speed:.4g} m/s): "

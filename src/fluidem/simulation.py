@@ -26,6 +26,7 @@ from .io.atomic import write_text_atomic
 from .io.gas_fields import GasFieldWriter
 from .io.probes_csv import ProbeWriter
 from .io.shapes_csv import ShapeWriter
+from .io.shapes_xdmf import ShapeSnapshotWriter
 from .io.restart import CHECKPOINT_NAMES, PREVIOUS_RESTART_NAME, RESTART_NAME, load_restart, save_restart
 from .io.summary import finite, summary_json
 from .io.snapshots import ParticleWriter
@@ -327,9 +328,11 @@ class Simulation:
         o = self.case.output
         end = self.case.time.end
         extra = {"contacts": lambda s: F.contact_numbers(s.engine).astype(np.int32)}
+        # the contact force (particles, plane walls, wall shapes) in coupled runs and in runs with wall shapes;
+        # hard spheres: collisions are impulses, no contact force to show
+        if (self.gas is not None or len(getattr(self.engine, "shapes", ()))) and self.engine.contact_forces:
+            extra["contact_force"] = lambda s: F.contact_force(s.engine)
         if self.gas is not None:
-            if self.engine.contact_forces:  # hard spheres: collisions are impulses, no contact force to show
-                extra["contact_force"] = lambda s: F.contact_force(s.engine)
             extra["gas_force"] = lambda s: F.gas_force(s.engine)
         self.observers["snapshots"] = ParticleWriter(self.out_dir, EveryTime(o.snapshot_interval or end / 100),
                                                      extra_fields=extra)
@@ -347,6 +350,9 @@ class Simulation:
         self.observers["probes"] = ProbeWriter(self.out_dir, probes, EveryTime(o.probe_interval or end / 1000))
         if len(getattr(self.engine, "shapes", ())):  # wall shapes: their loads and poses, shapes.csv
             self.observers["shapes"] = ShapeWriter(self.out_dir, EveryTime(o.probe_interval or end / 1000))
+            # and their triangles at the particle snapshot times, shapes.h5 + shapes.xdmf
+            self.observers["shape_snapshots"] = ShapeSnapshotWriter(self.out_dir,
+                                                                    EveryTime(o.snapshot_interval or end / 100))
         self.observers["checkpoint"] = Checkpointer(self.out_dir, EveryTime(o.checkpoint_interval or end / 10))
 
     # ------------------------------------------------------------ stepping

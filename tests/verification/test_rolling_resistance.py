@@ -14,6 +14,7 @@ import math
 
 import numpy as np
 import pytest
+from _helpers.heap import heap_angle
 
 DIAMETER = 4e-3  # [m]
 DENSITY = 2500.0  # [kg/m^3]
@@ -35,10 +36,13 @@ def equilibrium_overlap(law, mass, radius):
     return (mass * G / (4.0 / 3.0 * e_star * math.sqrt(radius))) ** (2.0 / 3.0)
 
 
-@pytest.mark.parametrize("model,dimensions", [("linear_spring_dashpot", 3), ("hertz_mindlin", 3),
-                                              ("linear_spring_dashpot", 2)])
-def test_rolling_sphere_stops_after_the_analytic_distance(make_engine, contact_law, model, dimensions):
-    law = contact_law(model, restitution=0.5, friction=0.5, rolling_friction=ROLLING)
+@pytest.mark.parametrize("model,dimensions,rolling_model", [
+    ("linear_spring_dashpot", 3, "cdt"), ("hertz_mindlin", 3, "cdt"), ("linear_spring_dashpot", 2, "cdt"),
+    ("linear_spring_dashpot", 3, "epsd"), ("hertz_mindlin", 3, "epsd"), ("linear_spring_dashpot", 2, "epsd")])
+def test_rolling_sphere_stops_after_the_analytic_distance(make_engine, contact_law, model, dimensions, rolling_model):
+    """cdt and epsd alike: the epsd spring reaches its limit μ_r R* F_n within a rotation of μ_r R* F_n / k_r
+    (k_r = k_t a², a wind-up of μ_r m g / k_t: 1e-5 of s here) and then holds it while the sphere rolls."""
+    law = contact_law(model, restitution=0.5, friction=0.5, rolling_friction=ROLLING, rolling_model=rolling_model)
     a = 0.5 * DIAMETER
     mass = DENSITY * math.pi * DIAMETER**3 / 6.0
     h = a - equilibrium_overlap(law, mass, a)
@@ -77,26 +81,6 @@ def test_rolling_torque_between_two_spheres(two_particles):
                           friction=0.0, stiffness=1e4)
     np.testing.assert_array_equal(plain.state.force, f)
     assert not plain.state.torque.any()
-
-
-def heap_angle(pos, radius):
-    """Angle of repose [deg] of a 2D heap: the slope of its flanks, fitted to the top particles of columns one
-    diameter wide between 20 % and 80 % of the heap's height, both sides together."""
-    d = 2.0 * radius.max()
-    x, y = pos[:, 0], pos[:, 1] + radius
-    on = y < 20 * d  # left-overs that rolled far still count (they lie on the floor)
-    centre = np.median(x[on])
-    bins = np.floor((x - centre) / d).astype(int)
-    tops = {}
-    for b, yy in zip(bins, y):
-        tops[b] = max(tops.get(b, 0.0), yy)
-    b = np.array(sorted(tops))
-    top = np.array([tops[k] for k in b])
-    height = top.max()
-    keep = (top > 0.2 * height) & (top < 0.8 * height)
-    dist = np.abs((b[keep] + 0.5) * d)
-    slope = -np.polyfit(dist, top[keep], 1)[0]
-    return math.degrees(math.atan(slope))
 
 
 def test_angle_of_repose_grows_with_rolling_friction():

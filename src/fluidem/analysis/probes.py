@@ -18,7 +18,8 @@ def energies(engine) -> dict[str, float]:
 
 
 def contacts(engine) -> dict[str, float]:
-    """Particle contacts, coordination number (mean contacts per particle) and max overlap / diameter."""
+    """Particle contacts, coordination number (mean contacts per particle) and max overlap / diameter;
+    ``wall_contacts`` and the overlap count plane walls and wall shapes."""
     st = engine.state
     # contacts across a periodic side by nearest image (engine.period: 0 along the other axes)
     per, total, worst = contact_counts(st.position, st.radius, engine.row_start, engine.partner,
@@ -30,6 +31,11 @@ def contacts(engine) -> dict[str, float]:
         gap = np.einsum("nwk,wk->nw", st.position[:, None, :] - point[None, :, :], normal) - st.radius[:, None]
         wall_contacts = int(np.sum(gap < 0))
         worst = max(worst, float(np.max(-gap / (2 * st.radius[:, None]), initial=0.0)))
+    shapes = getattr(engine, "shapes", None)
+    if shapes is not None and len(shapes):  # wall shapes: their contacts, each feature once (as the forces)
+        count, overlap, _ = shapes.contacts(st, engine.time)
+        wall_contacts += int(count.sum())
+        worst = max(worst, float(np.max(overlap / (2 * st.radius), initial=0.0)))
     return {"contacts": int(total), "wall_contacts": wall_contacts, "coordination": 2.0 * total / n,
             "max_overlap_rel": float(max(worst, 0.0))}
 

@@ -523,7 +523,9 @@ def carry_history(old_start, old_partner, old_hist, new_start, new_partner):
 
     A pair whose owner changed (a particle crossed a slab boundary) is found in the
     old row of its partner; its history, kept relative to the owner, changes sign.
-    Columns after the third (an adhesive law's pull-off distance) are scalars of the pair: copied as they are.
+    Column 3 (an adhesive law's pull-off distance) is a scalar of the pair: copied as it is; columns 4-6 (an
+    ``epsd`` law's rolling spring torque, ``contact.base.ROLLING_HISTORY``) are kept relative to the owner, as
+    the tangential spring: they change sign with it.
     """
     n = new_start.shape[0] - 1
     hist = np.zeros((new_partner.shape[0], old_hist.shape[1]))
@@ -540,7 +542,7 @@ def carry_history(old_start, old_partner, old_hist, new_start, new_partner):
                 hist[p, 1] = sign * old_hist[q, 1]
                 hist[p, 2] = sign * old_hist[q, 2]
                 for e in range(3, old_hist.shape[1]):
-                    hist[p, e] = old_hist[q, e]
+                    hist[p, e] = (sign if e >= 4 else 1.0) * old_hist[q, e]
     return hist
 
 

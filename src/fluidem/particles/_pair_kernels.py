@@ -37,7 +37,9 @@ A table with rolling friction or an adhesive law (slots 8 and 10 of ``contact/ba
 ``make_work``) runs ``_law_ext`` instead: ``contact_force_full`` in scalar code, with the relative spin
 gathered and the rolling torques and pull-off distances scattered. An adhesive law's contacts last
 beyond touch: the fourth history column holds each formed contact's pull-off distance, which widens
-``_filter``'s contact test for that pair until the pair parts beyond it (then the column is reset).
+``_filter``'s contact test for that pair until the pair parts beyond it (then the column is reset). A table
+with the ``epsd`` rolling model keeps each contact's rolling spring torque in history columns 4-6 (relative
+to the owner i, as the tangential spring), gathered and scattered with the rest.
 
 Each particle's force sum receives its terms in the order of the slab's contact list
 (slabs of one parity in parallel, then the other), whatever the number of threads: the
@@ -51,7 +53,7 @@ from numba import njit
 
 from ._neighbours_kernels import nearest_image
 from .contact._dispatch import contact_force, contact_force_full
-from .contact.base import N_SLOTS, SLOT_EXTENDED, SLOT_ROLLING_FRICTION
+from .contact.base import N_SLOTS, ROLLING_HISTORY, SLOT_EXTENDED, SLOT_ROLLING_FRICTION
 
 U = np.uintp  # unsigned array index (see _softsphere_kernels)
 
@@ -62,12 +64,15 @@ G_RX, G_RY, G_RZ, G_AI, G_AJ, G_MI, G_MJ, G_VX, G_VY, G_VZ, G_OX, G_OY, G_OZ, G_
 G_LAW = 16  # rows G_LAW … G_LAW + N_SLOTS − 1: the slots of the packed contact row (contact/base.py; slot 0 the code)
 # extended law only (rolling resistance, adhesion): the relative spin ω_i − ω_j
 G_SX, G_SY, G_SZ = G_LAW + N_SLOTS, G_LAW + N_SLOTS + 1, G_LAW + N_SLOTS + 2
-N_G = G_LAW + N_SLOTS + 3
+# extended law with a rolling spring (history columns 4-6): its torque before the step
+G_GX, G_GY, G_GZ = G_LAW + N_SLOTS + 3, G_LAW + N_SLOTS + 4, G_LAW + N_SLOTS + 5
+N_G = G_LAW + N_SLOTS + 6
 # rows of out: what the law gives
 O_FX, O_FY, O_FZ, O_CX, O_CY, O_CZ, O_HX, O_HY, O_HZ = range(9)
 # extended law only: the pull-off distance (history column 3) and the rolling torque per unit radius on i and on j
 O_REACH, O_MIX, O_MIY, O_MIZ, O_MJX, O_MJY, O_MJZ = range(9, 16)
-N_O = 16
+O_GX, O_GY, O_GZ = range(16, 19)  # the new rolling spring torque (history columns 4-6)
+N_O = 19
 
 
 @njit(cache=True, error_model="numpy")
@@ -110,9 +115,9 @@ def make_work(pp, row_start, hist, slab_start, slab_members, nthreads):
     touch = np.empty(npair, dtype=np.uint8)
     for p in range(npair):
         touch[p] = (hist[p, 0] != 0.0) | (hist[p, 1] != 0.0) | (hist[p, 2] != 0.0)
-    if hist.shape[1] > 3:
+    for e in range(3, hist.shape[1]):  # an adhesive law's pull-off distance, a rolling spring
         for p in range(npair):
-            touch[p] |= hist[p, 3] != 0.0
+            touch[p] |= hist[p, e] != 0.0
     uniform = _uniform(pp)
     ext = False
     for a in range(pp.shape[0]):
@@ -162,7 +167,8 @@ def _filter(flat, per, period, s, pos, radius, row_start, partner, slab_start, s
                 hist[p, U(1)] = 0.0
                 hist[p, U(2)] = 0.0
                 if wide:
-                    hist[p, U(3)] = 0.0
+                    for e in range(3, hist.shape[1]):
+                        hist[p, U(e)] = 0.0
             touch[p] = t
             cbuf[k] = p
             ibuf[k] = i
@@ -174,7 +180,9 @@ def _filter(flat, per, period, s, pos, radius, row_start, partner, slab_start, s
 def _gather(flat, per, period, uniform, ext, c0, n, pos, vel, omega, radius, mass, species, pp, partner, hist, cbuf,
             ibuf, G):
     """What the law reads of contacts c0 … c0 + n − 1 of the list into the rows of G (ext: also the relative
-    spin). ``per``: centre offsets by nearest image (as ``_filter``)."""
+    spin, and the rolling spring where the history has its columns). ``per``: centre offsets by nearest image
+    (as ``_filter``)."""
+    rolling = hist.shape[1] > ROLLING_HISTORY
     for c_ in range(n):
         c = U(c_)
         p = U(cbuf[U(c0) + c])
@@ -216,6 +224,11 @@ def _gather(flat, per, period, uniform, ext, c0, n, pos, vel, omega, radius, mas
             if not flat:
                 G[U(G_SX * CHUNK) + c] = omega[i, U(0)] - omega[j, U(0)]
                 G[U(G_SY * CHUNK) + c] = omega[i, U(1)] - omega[j, U(1)]
+            if rolling:
+                G[U(G_GZ * CHUNK) + c] = hist[p, U(ROLLING_HISTORY + 2)]
+                if not flat:
+                    G[U(G_GX * CHUNK) + c] = hist[p, U(ROLLING_HISTORY)]
+                    G[U(G_GY * CHUNK) + c] = hist[p, U(ROLLING_HISTORY + 1)]
 
 
 @njit(cache=True, error_model="numpy", fastmath=True)
@@ -289,11 +302,17 @@ def _law_ext(n, G, out, dt, update):
                G[U((G_LAW + 3) * CHUNK) + c], G[U((G_LAW + 4) * CHUNK) + c], G[U((G_LAW + 5) * CHUNK) + c],
                G[U((G_LAW + 6) * CHUNK) + c], G[U((G_LAW + 7) * CHUNK) + c], G[U((G_LAW + 8) * CHUNK) + c],
                G[U((G_LAW + 9) * CHUNK) + c], G[U((G_LAW + 10) * CHUNK) + c], G[U((G_LAW + 11) * CHUNK) + c])
-        fn, ftx, fty, ftz, hx, hy, hz, reach, mx, my, mz = contact_force_full(
+        # rolling inertia of the contact, 1/(1/(I_i + m_i a_i²) + 1/(I_j + m_j a_j²)) with I = (2/5) m a² (solid
+        # spheres, state.py) (Ai et al. 2011 eq. 18; the epsd damping reads it)
+        ki = 1.4 * mi * ai * ai
+        kj = 1.4 * mj * aj * aj
+        i_r = ki * kj / (ki + kj)
+        fn, ftx, fty, ftz, hx, hy, hz, reach, mx, my, mz, gx, gy, gz = contact_force_full(
             law, cut - r, nx, ny, nz, G[U(G_VX * CHUNK) + c], G[U(G_VY * CHUNK) + c], G[U(G_VZ * CHUNK) + c],
             G[U(G_OX * CHUNK) + c] * lever, G[U(G_OY * CHUNK) + c] * lever, G[U(G_OZ * CHUNK) + c] * lever,
             G[U(G_SX * CHUNK) + c], G[U(G_SY * CHUNK) + c], G[U(G_SZ * CHUNK) + c],
-            m_eff, r_eff, dt, G[U(G_HX * CHUNK) + c], G[U(G_HY * CHUNK) + c], G[U(G_HZ * CHUNK) + c], update)
+            m_eff, r_eff, i_r, dt, G[U(G_HX * CHUNK) + c], G[U(G_HY * CHUNK) + c], G[U(G_HZ * CHUNK) + c],
+            G[U(G_GX * CHUNK) + c], G[U(G_GY * CHUNK) + c], G[U(G_GZ * CHUNK) + c], update)
         out[U(O_FX * CHUNK) + c] = fn * nx + ftx
         out[U(O_FY * CHUNK) + c] = fn * ny + fty
         out[U(O_FZ * CHUNK) + c] = fn * nz + ftz
@@ -311,14 +330,18 @@ def _law_ext(n, G, out, dt, update):
         out[U(O_MJX * CHUNK) + c] = -mx / aj
         out[U(O_MJY * CHUNK) + c] = -my / aj
         out[U(O_MJZ * CHUNK) + c] = -mz / aj
+        out[U(O_GX * CHUNK) + c] = gx
+        out[U(O_GY * CHUNK) + c] = gy
+        out[U(O_GZ * CHUNK) + c] = gz
 
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _scatter(flat, ext, c0, n, partner, hist, sum_f, sum_c, cbuf, ibuf, out):
     """Forces and torques of contacts c0 … c0 + n − 1 into both particles' sums (+F on i, −F on j, the same
     −n × F_t per unit lever on both); springs stored. ext: also the rolling torques, and the pull-off distance
-    into history column 3 where there is one."""
+    into history column 3 where there is one, the rolling spring into columns 4-6 where they are."""
     wide = hist.shape[1] > 3
+    rolling = hist.shape[1] > ROLLING_HISTORY
     for c_ in range(n):
         c = U(c_)
         p = U(cbuf[U(c0) + c])
@@ -356,6 +379,11 @@ def _scatter(flat, ext, c0, n, partner, hist, sum_f, sum_c, cbuf, ibuf, out):
                 sum_c[j, U(1)] += out[U(O_MJY * CHUNK) + c]
             if wide:
                 hist[p, U(3)] = out[U(O_REACH * CHUNK) + c]
+            if rolling:
+                hist[p, U(ROLLING_HISTORY + 2)] = out[U(O_GZ * CHUNK) + c]
+                if not flat:
+                    hist[p, U(ROLLING_HISTORY)] = out[U(O_GX * CHUNK) + c]
+                    hist[p, U(ROLLING_HISTORY + 1)] = out[U(O_GY * CHUNK) + c]
 
 
 @njit(cache=True, error_model="numpy", inline="always")

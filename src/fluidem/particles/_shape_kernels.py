@@ -571,6 +571,7 @@ def shape_forces(shapes, pos, ref_pos, vel, omega, radius, mass, species, ids, r
     cand_e = np.empty(MAX_CANDIDATES, dtype=np.int64)
     cand_f = np.empty((MAX_CANDIDATES, 8))
     H = slot_elem.shape[1]
+    roll = slot_hist.shape[2] > 3  # an epsd law: the rolling spring torque in columns 3-5
     used = np.zeros(H, dtype=np.bool_)
     keep = np.zeros(MAX_CANDIDATES, dtype=np.bool_)
     slot_of = np.empty(MAX_CANDIDATES, dtype=np.int64)
@@ -631,15 +632,24 @@ def shape_forces(shapes, pos, ref_pos, vel, omega, radius, mass, species, ids, r
             h0 = slot_hist[i, h, 0] if h >= 0 else 0.0
             h1 = slot_hist[i, h, 1] if h >= 0 else 0.0
             h2 = slot_hist[i, h, 2] if h >= 0 else 0.0
-            fn, ftx, fty, ftz, hx, hy, hz, _reach, mx, my, mz = contact_force_full(
+            # an epsd law's rolling spring torque in columns 3-5 of the slot (the shape's spin is not
+            # subtracted: the rolling resistance acts on ω_i, as at a plane wall)
+            g0 = slot_hist[i, h, 3] if roll and h >= 0 else 0.0
+            g1 = slot_hist[i, h, 4] if roll and h >= 0 else 0.0
+            g2 = slot_hist[i, h, 5] if roll and h >= 0 else 0.0
+            fn, ftx, fty, ftz, hx, hy, hz, _reach, mx, my, mz, gx, gy, gz = contact_force_full(
                 _law_row(table, species[i], k), overlap, nx, ny, nz, vel[i, 0] - vwx, vel[i, 1] - vwy,
                 vel[i, 2] - vwz, a * omega[i, 0], a * omega[i, 1], a * omega[i, 2], omega[i, 0], omega[i, 1],
-                omega[i, 2], mass[i], a, dt, h0, h1, h2, update)
+                omega[i, 2], mass[i], a, 1.4 * mass[i] * a * a, dt, h0, h1, h2, g0, g1, g2, update)
             if update and h >= 0:
                 slot_elem[i, h] = e
                 slot_hist[i, h, 0] = hx
                 slot_hist[i, h, 1] = hy
                 slot_hist[i, h, 2] = hz
+                if roll:
+                    slot_hist[i, h, 3] = gx
+                    slot_hist[i, h, 4] = gy
+                    slot_hist[i, h, 5] = gz
             fx = fn * nx + ftx
             fy = fn * ny + fty
             fz = fn * nz + ftz
@@ -915,3 +925,30 @@ def bodies_step(shapes, dt, mode):
 def has_bodies(shapes):
     """True if a shape is a free body (its motion row holds the body's state)."""
     return shapes[13][INFO_BODIES] > 0
+
+
+@njit(cache=True, error_model="numpy")
+def contact_census(shapes, pos, radius, t, count, overlap, element):
+    """Per particle, its contacts with shape elements at time t (count (N,) int64, each feature once, as
+    ``shape_forces`` feels them), the largest overlap [m] (0 where none touches) and that element (−1: none),
+    over the near lists of the last ``shape_forces`` call (for the outputs: probes, run checks)."""
+    (kind, owner, geom, motion, reach, grid, dims, cell_start, cell_elems, table, near_count, near_elem, active,
+     info, slot_elem, slot_hist, ids_seen, ref_t, load) = shapes
+    count[:] = 0
+    overlap[:] = 0.0
+    element[:] = -1
+    if kind.shape[0] == 0:
+        return
+    P = np.empty((motion.shape[0], POSE_COLS))
+    pose(motion, t, P)
+    cand_e = np.empty(MAX_CANDIDATES, dtype=np.int64)
+    cand_f = np.empty((MAX_CANDIDATES, 8))
+    keep = np.zeros(MAX_CANDIDATES, dtype=np.bool_)
+    for q in range(info[INFO_ACTIVE]):
+        i = active[q]
+        m = particle_contacts(i, pos, radius, kind, owner, geom, P, near_count, near_elem, cand_e, cand_f, keep)
+        count[i] = m
+        for c in range(m):
+            if cand_f[c, 6] > overlap[i]:
+                overlap[i] = cand_f[c, 6]
+                element[i] = cand_e[c]

@@ -22,7 +22,7 @@ from ._pair_kernels import chunk_run, make_work
 from ._neighbours_kernels import (build_pairs, build_pairs_periodic, carry_history, cell_order, contacts_first,
                                   contacts_first_periodic, renumber_pairs)
 from .contact._dispatch import contact_force, contact_force_full
-from .contact.base import N_SLOTS, SLOT_EXTENDED, SLOT_ROLLING_FRICTION
+from .contact.base import N_SLOTS, ROLLING_HISTORY, SLOT_EXTENDED, SLOT_ROLLING_FRICTION
 from ._shape_kernels import bodies_kick_drift, bodies_step, body_loads, has_bodies, shape_forces, shape_step
 
 U = np.uintp  # unsigned array index: no wrap-around code (module docstring)
@@ -242,6 +242,7 @@ def wall_contact(i, w, pos, vel, omega, radius, mass, species, pw, wall_now, wal
     wvx, wvy, wvz = wall_now[w, 3], wall_now[w, 4], wall_now[w, 5]
     nx, ny, nz = wall_normal[w, 0], wall_normal[w, 1], wall_normal[w, 2]
     wide = wall_hist.shape[2] > 3
+    rolling = wall_hist.shape[2] > ROLLING_HISTORY
     gap = (pos[i, 0] - px) * nx + (pos[i, 1] - py) * ny + (pos[i, 2] - pz) * nz
     overlap = radius[i] - gap
     if overlap <= -(wall_hist[i, w, 3] if wide else 0.0):
@@ -249,16 +250,23 @@ def wall_contact(i, w, pos, vel, omega, radius, mass, species, pw, wall_now, wal
             wall_hist[i, w, :] = 0.0
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     a = radius[i]
-    fn, ftx, fty, ftz, hx, hy, hz, reach, mx, my, mz = contact_force_full(
+    g0 = wall_hist[i, w, ROLLING_HISTORY] if rolling else 0.0
+    g1 = wall_hist[i, w, ROLLING_HISTORY + 1] if rolling else 0.0
+    g2 = wall_hist[i, w, ROLLING_HISTORY + 2] if rolling else 0.0
+    fn, ftx, fty, ftz, hx, hy, hz, reach, mx, my, mz, gx, gy, gz = contact_force_full(
         _law_full(pw, species[i], w), overlap, nx, ny, nz, vel[i, 0] - wvx, vel[i, 1] - wvy, vel[i, 2] - wvz,
-        a * omega[i, 0], a * omega[i, 1], a * omega[i, 2], omega[i, 0], omega[i, 1], omega[i, 2], mass[i], a, dt,
-        wall_hist[i, w, 0], wall_hist[i, w, 1], wall_hist[i, w, 2], update)
+        a * omega[i, 0], a * omega[i, 1], a * omega[i, 2], omega[i, 0], omega[i, 1], omega[i, 2], mass[i], a,
+        1.4 * mass[i] * a * a, dt, wall_hist[i, w, 0], wall_hist[i, w, 1], wall_hist[i, w, 2], g0, g1, g2, update)
     if update:
         wall_hist[i, w, 0] = hx
         wall_hist[i, w, 1] = hy
         wall_hist[i, w, 2] = hz
         if wide:
             wall_hist[i, w, 3] = reach
+        if rolling:
+            wall_hist[i, w, ROLLING_HISTORY] = gx
+            wall_hist[i, w, ROLLING_HISTORY + 1] = gy
+            wall_hist[i, w, ROLLING_HISTORY + 2] = gz
     return (overlap, fn * nx + ftx, fn * ny + fty, fn * nz + ftz, -a * (ny * ftz - nz * fty) + mx,
             -a * (nz * ftx - nx * ftz) + my, -a * (nx * fty - ny * ftx) + mz)
 
@@ -278,6 +286,7 @@ def _gather_body(flat, lo, hi, pos, vel, omega, radius, mass, species, pw, walls
     # pull-off distance in wall_hist[i, w, 3] while it lasts (0 before it forms), as for pairs
     wext = extended(pw)
     wwide = wall_hist.shape[2] > 3
+    wroll = wall_hist.shape[2] > ROLLING_HISTORY  # an epsd wall law's rolling spring, columns 4-6
     half = 0.5 * dt
     moved = 0
     update = mode > 0
@@ -316,23 +325,32 @@ def _gather_body(flat, lo, hi, pos, vel, omega, radius, mass, species, pw, walls
                     wall_hist[i, w, U(1)] = 0.0
                     wall_hist[i, w, U(2)] = 0.0
                     if wwide:
-                        wall_hist[i, w, U(3)] = 0.0
+                        for e in range(3, wall_hist.shape[2]):
+                            wall_hist[i, w, U(e)] = 0.0
                     wall_touch[i, w] = False
                 continue
             if wext:
-                fn, ftx, fty, ftz, hx, hy, hz, reach, mx, my, mz = contact_force_full(
+                g0 = wall_hist[i, w, U(ROLLING_HISTORY)] if wroll else 0.0
+                g1 = wall_hist[i, w, U(ROLLING_HISTORY + 1)] if wroll else 0.0
+                g2 = wall_hist[i, w, U(ROLLING_HISTORY + 2)] if wroll else 0.0
+                fn, ftx, fty, ftz, hx, hy, hz, reach, mx, my, mz, gx, gy, gz = contact_force_full(
                     _law_full(pw, U(species[i]), w), overlap, nx, ny, nz,
                     vel[i, U(0)] - wall_now[w, U(3)], vel[i, U(1)] - wall_now[w, U(4)],
                     (0.0 if flat else vel[i, U(2)]) - wall_now[w, U(5)],
                     0.0 if flat else a * omega[i, U(0)], 0.0 if flat else a * omega[i, U(1)], a * omega[i, U(2)],
                     0.0 if flat else omega[i, U(0)], 0.0 if flat else omega[i, U(1)], omega[i, U(2)], mass[i], a,
-                    dt, wall_hist[i, w, U(0)], wall_hist[i, w, U(1)], wall_hist[i, w, U(2)], update)
+                    1.4 * mass[i] * a * a, dt, wall_hist[i, w, U(0)], wall_hist[i, w, U(1)], wall_hist[i, w, U(2)],
+                    g0, g1, g2, update)
                 if update:
                     wall_hist[i, w, U(0)] = hx
                     wall_hist[i, w, U(1)] = hy
                     wall_hist[i, w, U(2)] = hz
                     if wwide:
                         wall_hist[i, w, U(3)] = reach
+                    if wroll:
+                        wall_hist[i, w, U(ROLLING_HISTORY)] = gx
+                        wall_hist[i, w, U(ROLLING_HISTORY + 1)] = gy
+                        wall_hist[i, w, U(ROLLING_HISTORY + 2)] = gz
                     wall_touch[i, w] = True
                 # the rolling torque per unit lever (the radius a), as the sums hold it
                 sum_f[i, U(0)] += fn * nx + ftx
@@ -483,8 +501,8 @@ def touching_walls(wall_hist):
     for i in range(n):
         for w in range(nw):
             out[i, w] = (wall_hist[i, w, 0] != 0.0) | (wall_hist[i, w, 1] != 0.0) | (wall_hist[i, w, 2] != 0.0)
-            if wall_hist.shape[2] > 3:
-                out[i, w] |= wall_hist[i, w, 3] != 0.0
+            for e in range(3, wall_hist.shape[2]):
+                out[i, w] |= wall_hist[i, w, e] != 0.0
     return out
 
 
@@ -546,8 +564,8 @@ def _near_range(lo, hi, ref_pos, radius, wall_point0, wall_normal, moving, reach
             gap = ((x - wall_point0[w, U(0)]) * wall_normal[w, U(0)] + (y - wall_point0[w, U(1)]) * wall_normal[w, U(1)]
                    + (z - wall_point0[w, U(2)]) * wall_normal[w, U(2)])
             touch = (wall_hist[i, w, U(0)] != 0.0) | (wall_hist[i, w, U(1)] != 0.0) | (wall_hist[i, w, U(2)] != 0.0)
-            if wide:
-                touch |= wall_hist[i, w, U(3)] != 0.0
+            for e in range(3, wall_hist.shape[2]):
+                touch |= wall_hist[i, w, U(e)] != 0.0
             if moving[w] or gap < a + reach[w]:
                 near_wall[i, U(c)] = w
                 c += 1
@@ -556,7 +574,8 @@ def _near_range(lo, hi, ref_pos, radius, wall_point0, wall_normal, moving, reach
                 wall_hist[i, w, U(1)] = 0.0
                 wall_hist[i, w, U(2)] = 0.0
                 if wide:
-                    wall_hist[i, w, U(3)] = 0.0
+                    for e in range(3, wall_hist.shape[2]):
+                        wall_hist[i, w, U(e)] = 0.0
                 touch = False
             wall_touch[i, w] = touch
         near_count[i] = c

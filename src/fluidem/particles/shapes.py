@@ -18,9 +18,11 @@ import numpy as np
 from ..case import SHAPE_KINDS
 from ..errors import CaseError
 from . import _shape_kernels as S
+from .contact.base import uses_rolling_spring
 
 NEAR_CAPACITY = 16  # near elements per particle at first (widened when a list needs more)
 HISTORY_SLOTS = 6  # shape contacts per particle that keep a tangential spring
+CYLINDER_SIDES = 32  # a cylinder drawn for output: this many quads of two triangles round its side
 MAX_GRID_CELLS = 200_000  # cells of the broad-phase grid at most (coarser cells beyond)
 
 
@@ -146,7 +148,8 @@ class ShapeSet:
         self.info[S.INFO_REORDER] = engine.last_reorder
         self.info[S.INFO_BODIES] = sum(s.body is not None for s in self.shapes)
         self.slot_elem = np.full((n, HISTORY_SLOTS if len(self.kind) else 0), -1, np.int64)
-        self.slot_hist = np.zeros((n, self.slot_elem.shape[1], 3))
+        # an epsd law's rolling spring torque in columns 3-5 of a slot
+        self.slot_hist = np.zeros((n, self.slot_elem.shape[1], 6 if uses_rolling_spring(self.table) else 3))
         self.ids_seen = st.ids.astype(np.int64).copy()
         self.ref_t = np.zeros(1)
         self.load = np.zeros((len(self.shapes), 6))
@@ -263,6 +266,25 @@ class ShapeSet:
                 f"{bad.size} particle(s), e.g. particle {i} by {overlap[i]:.3g} m; particles must start apart "
                 "from the walls (set particles.placement.region_lower and region_upper inside the shapes)")
 
+    def contacts(self, state, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(contacts (N,) int64, deepest overlap (N,) [m], its shape index (N,), −1: none) of each particle with
+        the shapes at time t (``_shape_kernels.contact_census``), from the near lists of the last force
+        evaluation; zeros without shapes."""
+        n = state.n
+        count, overlap = np.zeros(n, np.int64), np.zeros(n)
+        element = np.full(n, -1, np.int64)
+        if len(self.shapes) and hasattr(self, "kind") and len(self.kind):
+            S.contact_census(self.kernel_arrays(), state.position, state.radius, t, count, overlap, element)
+        shape = np.full(n, -1, np.int64)
+        hit = element >= 0
+        shape[hit] = self.owner[element[hit]]
+        return count, overlap, shape
+
+    def triangle_shapes(self) -> np.ndarray:
+        """(T,) int64: the shape index of each triangle of ``world_triangles`` (in its order)."""
+        counts = [np.where(s.kind == S.CYLINDER, 2 * CYLINDER_SIDES, 1) for s in self.shapes]
+        return np.repeat(np.arange(len(self.shapes)), [int(c.sum()) for c in counts]).astype(np.int64)
+
     def world_triangles(self, t: float) -> np.ndarray:
         """(T, 3, 3) corners of every triangle and segment (a degenerate triangle) at time t, for output; a
         cylinder is drawn as 32 quads of two triangles. Free bodies are drawn at rest (their pose is that of
@@ -288,7 +310,7 @@ class ShapeSet:
         return np.concatenate(out) if out else np.zeros((0, 3, 3))
 
 
-def _cylinder_triangles(g, n=32):
+def _cylinder_triangles(g, n=CYLINDER_SIDES):
     c, u, rad, length = g[0:3], g[3:6], g[6], g[7]
     a = np.cross(u, [1.0, 0.0, 0.0] if abs(u[0]) < 0.9 else [0.0, 1.0, 0.0])
     a /= np.linalg.norm(a)

@@ -17,7 +17,7 @@ from . import _softsphere_kernels as K
 from ._neighbours_kernels import (build_pairs, build_pairs_periodic, carry_history, contacts_first,
                                   contacts_first_periodic)
 from ._population_kernels import drop_pairs
-from .contact.base import N_SLOTS
+from .contact.base import N_SLOTS, ROLLING_HISTORY, uses_rolling_spring
 from .engine import ParticleEngine
 from .shapes import build_shapes
 
@@ -26,6 +26,14 @@ STABILITY_FRACTION = 0.1  # dt must stay below t_c / 10: at least ten steps per 
 # (as LAMMPS sorts its atoms), for beds of 1000 particles and more; smaller ones keep their numbering
 REORDER_INTERVAL = 1000
 REORDER_MIN_PARTICLES = 1000
+
+
+def _history_width(table: np.ndarray, adhesive: bool) -> int:
+    """History columns of the contacts of a packed table: 3 (tangential spring), 4 with an adhesive law's
+    pull-off distance, 7 with an ``epsd`` law's rolling spring torque (columns 4-6)."""
+    if uses_rolling_spring(table):
+        return ROLLING_HISTORY + 3
+    return 4 if adhesive else 3
 
 
 class SoftSphereEngine(ParticleEngine):
@@ -41,8 +49,9 @@ class SoftSphereEngine(ParticleEngine):
         self.shapes = build_shapes(case)  # wall shapes (polylines, polygons, cylinders, meshes)
         self.shape_table, shape_times = self.shapes.contact_table(self)
         self.contact_times += shape_times
-        # an adhesive law keeps each formed contact's pull-off distance in a fourth history column
-        self.wall_hist = np.zeros((st.n, len(self.walls.planes), 4 if self.wall_adhesive else 3))
+        # an adhesive law keeps each formed contact's pull-off distance in a fourth history column, an epsd
+        # rolling law its rolling spring torque in columns 4-6 (contact/base.py)
+        self.wall_hist = np.zeros((st.n, len(self.walls.planes), _history_width(self.pw, self.wall_adhesive)))
         dmax = 2.0 * self.largest_radius  # of the particles there and of those inlets may insert
         self.skin = case.neighbours.skin if case.neighbours.skin is not None else 0.25 * dmax
         self._check_pull_off()
@@ -61,7 +70,7 @@ class SoftSphereEngine(ParticleEngine):
             self._renumber()
         self.ref_pos = st.position.copy()
         self.row_start, self.partner, self.slab_start, self.slab_members = self._build_pairs(self.skin)
-        self.hist = np.zeros((self.partner.shape[0], 4 if self.pair_adhesive else 3))
+        self.hist = np.zeros((self.partner.shape[0], _history_width(self.pp, self.pair_adhesive)))
         if self.periodic:
             contacts_first_periodic(st.position, st.radius, self.row_start, self.partner, self.hist, self.period)
         else:

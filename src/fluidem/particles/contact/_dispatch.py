@@ -27,7 +27,7 @@ import sys
 from numba import njit
 
 from ...registry import compiled_switch
-from .base import contact_models
+from .base import ROLLING_EPSD, contact_models
 
 TINY = 1e-300  # guards a division whose result a select then drops (no inf or NaN is formed)
 
@@ -151,20 +151,72 @@ def contact_force(p, overlap, nx, ny, nz, vx, vy, vz, wx, wy, wz, m_eff, r_eff, 
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def contact_force_full(p, overlap, nx, ny, nz, vx, vy, vz, wx, wy, wz, rx, ry, rz, m_eff, r_eff, dt, hx, hy, hz,
-                       update):
+def _rolling_spring(p, load, k_t, r_eff, i_r, nx, ny, nz, rx, ry, rz, dt, gx, gy, gz, update):
+    """Rolling torque on i [N m] and the new spring torque of an ``epsd`` contact (slot 9 = ROLLING_EPSD).
+
+    The elastic–plastic spring–dashpot of Ai, Chen, Rotter & Ooi (2011, model C, eqs 13-18), with the rolling
+    stiffness k_r = k_t R*² of Iwashita & Oda (1998) (LIGGGHTS ``rolling_friction epsd2``; k_t the law's
+    tangential stiffness at this overlap):
+
+        M_k ← M_k − k_r Δθ_r,   Δθ_r = ω_r,t Δt                       (Ai 2011 eq. 13)
+        |M_k| ≤ M_m = μ_r R* F   (full mobilisation: M_k scaled to M_m)  (eq. 14)
+        M_d = −C_r ω_r,t below the limit, 0 at it (f = 0),
+        C_r = η_r 2 sqrt(I_r k_r)                                       (eqs 17-18)
+
+    ω_r,t: the relative spin ω_i − ω_j without its part along n (torsion is not resisted); the stored M_k is
+    first turned into the current tangent plane with its magnitude kept, as the tangential spring (Sun 2007
+    eq. 20). I_r [kg m²]: the rolling inertia of the contact, 1/(1/(I_i + m_i a_i²) + 1/(I_j + m_j a_j²))
+    (Ai 2011 eq. 18; I_i + m_i a_i² against a wall). F = max(F_n + 2 F_c, 0) [N], the load.
+    Returns (mx, my, mz, gx, gy, gz): the torque M_k + M_d on i, and M_k (history; unchanged in magnitude
+    without ``update``).
+    """
+    rn = rx * nx + ry * ny + rz * nz
+    tx = rx - rn * nx
+    ty = ry - rn * ny
+    tz = rz - rn * nz
+    gn = gx * nx + gy * ny + gz * nz
+    g2 = gx * gx + gy * gy + gz * gz
+    gx -= gn * nx
+    gy -= gn * ny
+    gz -= gn * nz
+    g2p = gx * gx + gy * gy + gz * gz
+    s = math.sqrt(g2 / g2p) if g2p > 0.0 else 1.0
+    k_r = k_t * r_eff * r_eff
+    du = dt if update else 0.0
+    gx = gx * s - k_r * tx * du
+    gy = gy * s - k_r * ty * du
+    gz = gz * s - k_r * tz * du
+    limit = p[8] * r_eff * load
+    g2 = gx * gx + gy * gy + gz * gz
+    if g2 > limit * limit:  # full mobilisation: the spring slips at the limit, no damping (f = 0)
+        s = limit / math.sqrt(g2)
+        gx *= s
+        gy *= s
+        gz *= s
+        return gx, gy, gz, gx, gy, gz
+    c_r = p[11] * 2.0 * math.sqrt(i_r * k_r)
+    return gx - c_r * tx, gy - c_r * ty, gz - c_r * tz, gx, gy, gz
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def contact_force_full(p, overlap, nx, ny, nz, vx, vy, vz, wx, wy, wz, rx, ry, rz, m_eff, r_eff, i_r, dt, hx, hy, hz,
+                       gx, gy, gz, update):
     """``contact_force`` for every law, adhesive ones included, with rolling resistance.
 
     As ``contact_force``, and: ``overlap`` may be negative for an adhesive law (a formed contact pulled
-    apart, down to its pull-off distance); r : ω_i − ω_j [rad/s], the relative spin (ω_i against a wall).
+    apart, down to its pull-off distance); r : ω_i − ω_j [rad/s], the relative spin (ω_i against a wall);
+    i_r : the contact's rolling inertia [kg m²] (``_rolling_spring``; read by the ``epsd`` damping only);
+    g : the rolling spring torque [N m] of an ``epsd`` contact before the step (zeros for the other models).
 
     Returns
     -------
-    (fn, ftx, fty, ftz, hx, hy, hz, reach, mx, my, mz): as ``contact_force``; reach: the pull-off distance
-    |δ_c| [m] of an adhesive law (0 otherwise), down to which the contact lasts; m: rolling-resistance torque
-    on i [N m] (−m on j), the constant directional torque −μ_r R* F ω_r/|ω_r| (Ai et al. 2011 model A;
-    LIGGGHTS ``rolling_friction cdt``) with the load F = max(F_n + 2 F_c, 0) that also sets the Coulomb limit
-    μ F (F_c the pull-off force, Thornton & Yin 1991; F = max(F_n, 0) for a non-adhesive law).
+    (fn, ftx, fty, ftz, hx, hy, hz, reach, mx, my, mz, gx, gy, gz): as ``contact_force``; reach: the pull-off
+    distance |δ_c| [m] of an adhesive law (0 otherwise), down to which the contact lasts; m: rolling-resistance
+    torque on i [N m] (−m on j); g: the new rolling spring torque (``epsd``; g as given otherwise). The model
+    in slot 9: ROLLING_CDT, the constant directional torque −μ_r R* F ω_r/|ω_r| (Ai et al. 2011 model A;
+    LIGGGHTS ``rolling_friction cdt``); ROLLING_EPSD, the spring–dashpot of ``_rolling_spring``. The load
+    F = max(F_n + 2 F_c, 0) also sets the Coulomb limit μ F (F_c the pull-off force, Thornton & Yin 1991;
+    F = max(F_n, 0) for a non-adhesive law).
     """
     fel, eta_n, k_t, eta_t = full_coefficients(p, overlap, m_eff, r_eff)
     f_c, reach = pull_off(p, r_eff)
@@ -173,7 +225,11 @@ def contact_force_full(p, overlap, nx, ny, nz, vx, vy, vz, wx, wy, wz, rx, ry, r
     load = max(fn + 2.0 * f_c, 0.0)
     ftx, fty, ftz, hx, hy, hz = _tangential(p[7] * load, k_t, eta_t, vn, nx, ny, nz, vx, vy, vz, wx, wy, wz,
                                             dt, hx, hy, hz, update)
+    if p[9] == ROLLING_EPSD:
+        mx, my, mz, gx, gy, gz = _rolling_spring(p, load, k_t, r_eff, i_r, nx, ny, nz, rx, ry, rz, dt, gx, gy, gz,
+                                                 update)
+        return fn, ftx, fty, ftz, hx, hy, hz, reach, mx, my, mz, gx, gy, gz
     spin = math.sqrt(rx * rx + ry * ry + rz * rz)
     mr = p[8] * r_eff * load / max(spin, TINY)
     mr = mr if spin > 0.0 else 0.0
-    return fn, ftx, fty, ftz, hx, hy, hz, reach, -mr * rx, -mr * ry, -mr * rz
+    return fn, ftx, fty, ftz, hx, hy, hz, reach, -mr * rx, -mr * ry, -mr * rz, gx, gy, gz

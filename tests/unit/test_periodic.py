@@ -110,15 +110,9 @@ def test_a_box_too_short_for_the_cut_off_is_refused(base):
         SoftSphereEngine(validate_case(base([[D, D, D]], walls=[box((10 * D, 2.2 * D, 10 * D), ["y"])])))
 
 
-def test_gpu_and_hard_sphere_engines_refuse_periodic_sides(base, contact_law):
+def test_the_gpu_engine_refuses_periodic_sides(base):
     case = validate_case(base([[5 * D] * 3]))
     assert any("walls.0.periodic = ['x']" in r for r in gpu_refusals(case))
-    data = base([[5 * D] * 3])
-    data["particles"]["contact"] = contact_law("hard_sphere")
-    from fluidem.particles.engine import engine_for
-
-    with pytest.raises(CaseError, match="hard-sphere engine .* no periodic sides"):
-        engine_for(validate_case(data))
 
 
 @pytest.mark.parametrize("axis", [0, 1, 2])

@@ -52,7 +52,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ._neighbours_kernels import _csr_of_pairs, build_pairs
+from ._neighbours_kernels import _csr_of_pairs, build_pairs, build_pairs_periodic
 from .contact.base import SLOT_FRICTION
 from .contact.hard_sphere import NO_COLLISION, SLOT_COLLAPSE_TIME, SLOT_RESTITUTION, STICKING, impulse
 
@@ -103,6 +103,24 @@ def build_neighbours(pos, radius, skin, dim2):
     if n == 0:
         return np.zeros(1, dtype=np.int64), np.empty(0, dtype=np.int32)
     row_start, partner, _, _ = build_pairs(pos, radius, skin, dim2)
+    return _full_list(n, row_start, partner)
+
+
+@njit(cache=True, error_model="numpy")
+def build_neighbours_periodic(pos, radius, skin, dim2, period, box_lo):
+    """``build_neighbours`` in a box with periodic sides: all pairs closer than R_i + R_j + skin between
+    nearest images (``_neighbours_kernels.build_pairs_periodic``; positions inside the box on the periodic axes,
+    lengths ``period`` (3,) [m], 0 on the others, lower corner ``box_lo``)."""
+    n = pos.shape[0]
+    if n == 0:
+        return np.zeros(1, dtype=np.int64), np.empty(0, dtype=np.int32)
+    row_start, partner, _, _ = build_pairs_periodic(pos, radius, skin, dim2, period, box_lo)
+    return _full_list(n, row_start, partner)
+
+
+@njit(cache=True, error_model="numpy")
+def _full_list(n, row_start, partner):
+    """The half list (CSR by owner) entered in both directions, rows ascending (a stable counting sort)."""
     m = partner.shape[0]
     both = np.empty((1, 2 * m), dtype=np.int64)
     k = 0
@@ -158,13 +176,30 @@ def _move(i, t, P):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
-def _collide_pair(a, b, P, Q, e, mu):
-    """Apply the collision of particles a and b (both at the same time); returns (E_n, E_t, class)."""
+def _image_shift(ra, rb, length):
+    """The image shift s = −L round((x_ref,a − x_ref,b) / L) [m] of a pair along an axis of period L > 0
+    (0 for L = 0): from the reference positions of the neighbour list, so constant between list builds (no
+    position is wrapped in between) and the nearest image of the build (Allen & Tildesley 1987 eq. 1.9).
+    x_a − x_b + s is then the pair's offset whichever side of the seam either particle has reached."""
+    return -length * math.floor((ra - rb) / length + 0.5) if length > 0.0 else 0.0
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def _collide_pair(a, b, P, Q, e, mu, R, per, lx, ly, lz):
+    """Apply the collision of particles a and b (both at the same time); returns (E_n, E_t, class).
+    ``per``: a box with periodic sides of lengths (lx, ly, lz) [m] (0: not periodic), the offset then taken
+    with the pair's image shift (``_image_shift``)."""
     oa = P_ROW * a
     ob = P_ROW * b
     rx = P[oa + P_X] - P[ob + P_X]
     ry = P[oa + P_Y] - P[ob + P_Y]
     rz = P[oa + P_Z] - P[ob + P_Z]
+    if per:
+        qa = R_ROW * a
+        qb = R_ROW * b
+        rx += _image_shift(R[qa + R_X], R[qb + R_X], lx)
+        ry += _image_shift(R[qa + R_Y], R[qb + R_Y], ly)
+        rz += _image_shift(R[qa + R_Z], R[qb + R_Z], lz)
     inv_r = 1.0 / math.sqrt(rx * rx + ry * ry + rz * rz)
     nx = rx * inv_r
     ny = ry * inv_r
@@ -300,11 +335,12 @@ def _pair_time(rx, ry, rz, vx, vy, vz, sig, t, horizon):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
-def _scan(t, xi, yi, zi, vxi, vyi, vzi, ri, best, partf, P, p0, p1, nbr, sync, planar):
+def _scan(t, xi, yi, zi, vxi, vyi, vzi, ri, best, partf, P, p0, p1, nbr, sync, planar, R, i, per, lx, ly, lz):
     """Earliest collision of a particle at (x, v, R)_i with its neighbours nbr[p0:p1] if before ``best``:
     returns the new (best, partner as a float). ``sync``: every particle's clock is t, so the stored positions
     are those at t (the same numbers as moving them by zero). ``planar`` (see ``_load``): the z terms, all
-    exactly zero then, are not read (the same numbers result)."""
+    exactly zero then, are not read (the same numbers result). ``per``: periodic sides of lengths (lx, ly, lz),
+    the offsets taken with each pair's image shift (``_image_shift``; i is the particle, R the reference rows)."""
     for p in range(p0, p1):
         j = nbr[p]
         o = P_ROW * j
@@ -326,6 +362,13 @@ def _scan(t, xi, yi, zi, vxi, vyi, vzi, ri, best, partf, P, p0, p1, nbr, sync, p
             vzj = P[o + P_VZ]
             vz = vzi - vzj
             rz = zi - P[o + P_Z] if sync else zi - (P[o + P_Z] + vzj * (t - P[o + P_T]))
+        if per:
+            qi = R_ROW * i
+            qj = R_ROW * j
+            rx += _image_shift(R[qi + R_X], R[qj + R_X], lx)
+            ry += _image_shift(R[qi + R_Y], R[qj + R_Y], ly)
+            if not planar:
+                rz += _image_shift(R[qi + R_Z], R[qj + R_Z], lz)
         tc = _pair_time(rx, ry, rz, vx, vy, vz, ri + P[o + P_R], t, best - t)
         better = tc < best
         best = tc if better else best
@@ -385,7 +428,7 @@ def _finish_event(i, t, xi, yi, zi, vxi, vyi, vzi, best, partf, R, half_skin, nc
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
-def _predict(i, t, t_end, P, nbr_start, nbr, walls, R, half_skin, ncoll, ev, planar, sync):
+def _predict(i, t, t_end, P, nbr_start, nbr, walls, R, half_skin, ncoll, ev, planar, sync, per, lx, ly, lz):
     """Earliest event of particle i (uint32) after time t and before t_end (else none): stores (partner, its
     collision counter) in ev[i] and returns the time (inf for none). ``planar``: see ``_load``; ``sync``
     (a constant): every particle's clock is t."""
@@ -406,12 +449,13 @@ def _predict(i, t, t_end, P, nbr_start, nbr, walls, R, half_skin, ncoll, ev, pla
     best, partf = _wall_event(i, t, xi, yi, zi, vxi, vyi, vzi, ri, t_end, float(NO_EVENT), walls, R)
     # neighbours: Hoomans eq. 30
     best, partf = _scan(t, xi, yi, zi, vxi, vyi, vzi, ri, best, partf, P, nbr_start[i], nbr_start[i + 1], nbr,
-                        sync, planar)
+                        sync, planar, R, i, per, lx, ly, lz)
     return _finish_event(i, t, xi, yi, zi, vxi, vyi, vzi, best, partf, R, half_skin, ncoll, ev)
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _predict_all(t, t_end, P, up_start, up, walls, R, half_skin, ncoll, ev, ev_time, T, L, planar, partf):
+def _predict_all(t, t_end, P, up_start, up, walls, R, half_skin, ncoll, ev, ev_time, T, L, planar, partf, per, lx, ly,
+                 lz):
     """Events of all particles, all with their clocks at t (the start of a step or a list rebuild).
 
     Each pair is solved once, from its lower index (``up_start, up``: the upper half of the neighbour list,
@@ -456,6 +500,13 @@ def _predict_all(t, t_end, P, up_start, up, walls, R, half_skin, ncoll, ev, ev_t
             else:
                 vz = vzi - P[q + P_VZ]
                 rz = zi - P[q + P_Z]
+            if per:  # the pair's image shift (_image_shift)
+                qi = R_ROW * i
+                qj = R_ROW * j
+                rx += _image_shift(R[qi + R_X], R[qj + R_X], lx)
+                ry += _image_shift(R[qi + R_Y], R[qj + R_Y], ly)
+                if not planar:
+                    rz += _image_shift(R[qi + R_Z], R[qj + R_Z], lz)
             b = rx * vx + ry * vy + rz * vz
             sig = ri + P[q + P_R]
             c = rx * rx + ry * ry + rz * rz - sig * sig
@@ -597,7 +648,7 @@ def _book(i, j, code, tabs, en, et, kind, remedy, Q, ncoll, counters, energy, lo
 # ---------------------------------------------------------------- the step loop
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _events(t_abs0, dt, P, Q, species, pp, pw, walls, wall_normal, nbr_start, nbr, R, half_skin, ncoll, ev, T, L,
-            planar, events, max_events, counters, energy, log):
+            planar, events, max_events, counters, energy, log, per, lx, ly, lz):
     """Process the events of one step in time order until the step ends, a particle leaves its skin sphere
     or the event limit is passed; returns (reason, time of the last event, events so far in the step).
 
@@ -642,7 +693,7 @@ def _events(t_abs0, dt, P, Q, species, pp, pw, walls, wall_normal, nbr_start, nb
             else:
                 remedy = False
             if p >= 0:
-                en, et, kind = _collide_pair(i, j, P, Q, e, mu)
+                en, et, kind = _collide_pair(i, j, P, Q, e, mu, R, per, lx, ly, lz)
             else:
                 en, et, kind = _collide_wall(i, wall_normal[w, 0], wall_normal[w, 1], wall_normal[w, 2], P, Q, e, mu)
             if kind != NO_COLLISION:
@@ -650,11 +701,27 @@ def _events(t_abs0, dt, P, Q, species, pp, pw, walls, wall_normal, nbr_start, nb
         # new predictions for i, then j ("reset lists" of Fig. 3); one call site, so one inlined copy
         k = i
         while True:
-            _queue_set(k, _predict(k, t, dt, P, nbr_start, nbr, walls, R, half_skin, ncoll, ev, planar, False), T, L)
+            _queue_set(k, _predict(k, t, dt, P, nbr_start, nbr, walls, R, half_skin, ncoll, ev, planar, False, per,
+                                   lx, ly, lz), T, L)
             if k == j:
                 break
             k = j
     return EV_END, dt, events
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _wrap(k, P, period, box_lo, image_step):
+    """Particle k back into the box along each periodic axis d (L_d = ``period[d]`` > 0): x_d ← x_d − m L_d with
+    m = floor((x_d − lo_d) / L_d), image_step[k, d] += m (as ``_softsphere_kernels.wrap_positions``)."""
+    for d in range(3):
+        length = period[d]
+        if length > 0.0:
+            x = P[P_ROW * k + P_X + d]
+            lo = box_lo[d]
+            if x >= lo + length or x < lo:
+                m = math.floor((x - lo) / length)
+                P[P_ROW * k + P_X + d] = x - m * length
+                image_step[k, d] += np.int64(m)
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -672,7 +739,7 @@ def _kick(n, P, Q, gx, gy, gz, ext_force, h, dim2):
 @njit(cache=True, error_model="numpy")
 def advance(pos, vel, omega, radius, inv_mass, inv_inertia, species, pp, pw, wall_point, wall_normal, gravity,
             ext_force, dim2, nbr_start, nbr, up_start, up, ref_pos, skin, last_coll, step0, dt, nsteps, max_events,
-            counters, energy, log, info, work, split):
+            counters, energy, log, info, work, split, period, box_lo, image_step):
     """Run ``nsteps`` force steps of length ``dt`` (Hoomans 1996 Fig. 3 per step).
 
     ``split`` False: Hoomans' force step, v += (g + F/m) DT (eqs 33–34), then the collisions of the step in
@@ -698,6 +765,11 @@ def advance(pos, vel, omega, radius, inv_mass, inv_inertia, species, pp, pw, wal
     info : (3,) float64, on failure (step index, time in step, events)
     work : ``hardsphere.workspace(N)``
     split : bool, the split force step (above) instead of Hoomans'
+    period : (3,) box length along each periodic axis [m], 0 along the others; box_lo (3,) its lower corner.
+        Pairs meet across a periodic side by their image shift (``_image_shift``). Positions are wrapped into
+        the box at each list rebuild only (x ← x − k L, ``_wrap``), so between rebuilds a particle is outside
+        the box by at most skin/2, and each rebuild adds k to ``image_step`` (N, 3) int64 (the caller adds it
+        to the image counts when the call succeeds)
 
     Returns (nbr_start, nbr, up_start, up, status); status OK or TOO_MANY_EVENTS. On OK, pos, vel, omega,
     ref_pos and last_coll hold the new state; on TOO_MANY_EVENTS they are left as they were
@@ -721,34 +793,46 @@ def advance(pos, vel, omega, radius, inv_mass, inv_inertia, species, pp, pw, wal
     nbr_start_u = nbr_start.view(np.uint64)
     nbr_u = nbr.view(np.uint32)
     kick = 0.5 * dt if split else dt  # the force impulse before the collisions, per unit acceleration
+    lx = period[0]
+    ly = period[1]
+    lz = period[2]
+    per = lx > 0.0 or ly > 0.0 or lz > 0.0
     for s in range(nsteps):
         t_abs0 = (step0 + s) * dt
         # force step: v = v* + (g + F/m) DT before the collisions (Hoomans eqs 33–34), or its first half (split)
         _kick(n, P, Q, gx, gy, gz, ext_force, kick, dim2)
         for i in range(n):
             P[P_ROW * i + P_T] = 0.0
-        _predict_all(0.0, dt, P, up_start, up, walls, R, half_skin, ncoll, ev, ev_time, T, L, planar, F)
+        _predict_all(0.0, dt, P, up_start, up, walls, R, half_skin, ncoll, ev, ev_time, T, L, planar, F, per, lx,
+                     ly, lz)
         events = np.int64(0)
         t = 0.0
         while n > 0:
             reason, t, events = _events(t_abs0, dt, P, Q, species, pp, pw, walls, wall_normal, nbr_start_u, nbr_u, R,
-                                        half_skin, ncoll, ev, T, L, planar, events, max_events, counters, energy, log)
+                                        half_skin, ncoll, ev, T, L, planar, events, max_events, counters, energy, log, per,
+                                        lx, ly, lz)
             if reason != EV_SKIN:
                 break
             # a particle reached skin/2 from its reference position: all to time t, new list around X
             for k in range(n):
                 _move(k, t, P)
+                if per:
+                    _wrap(k, P, period, box_lo, image_step)
                 X[k, 0] = P[P_ROW * k + P_X]
                 X[k, 1] = P[P_ROW * k + P_Y]
                 X[k, 2] = P[P_ROW * k + P_Z]
-            nbr_start, nbr = build_neighbours(X, radius, skin, dim2)
+            if per:
+                nbr_start, nbr = build_neighbours_periodic(X, radius, skin, dim2, period, box_lo)
+            else:
+                nbr_start, nbr = build_neighbours(X, radius, skin, dim2)
             nbr_start_u = nbr_start.view(np.uint64)
             nbr_u = nbr.view(np.uint32)
             up_start, up = upper_half(nbr_start, nbr)
             _set_reference(X, radius, walls, skin, R, ev_time)
             counters[C_REBUILDS] += 1
             rebuilt = True
-            _predict_all(t, dt, P, up_start, up, walls, R, half_skin, ncoll, ev, ev_time, T, L, planar, F)
+            _predict_all(t, dt, P, up_start, up, walls, R, half_skin, ncoll, ev, ev_time, T, L, planar, F, per, lx, ly,
+                         lz)
         counters[C_EVENTS] += events
         if reason == EV_LIMIT:
             info[0] = s

@@ -36,6 +36,7 @@ from pydantic import ValidationError
 from ..errors import CaseError
 from ..state import ParticleState
 from . import _hardsphere_kernels as K
+from ._softsphere_kernels import wrap_positions
 from .contact.base import N_SLOTS
 from .contact.hard_sphere import HardSphere
 from .engine import ParticleEngine
@@ -95,12 +96,6 @@ class HardSphereEngine(ParticleEngine):
 
     def __init__(self, case, state: ParticleState | None = None):
         walls = build_walls(case)
-        if np.any(walls.period > 0.0):
-            axes = [w.periodic for w in case.walls if w.kind == "box" and w.periodic][0]
-            raise CaseError(
-                f"walls: a box with periodic = {list(axes)}; the hard-sphere engine (particles.contact.model = "
-                f"{case.particles.contact.model!r}) has no periodic sides yet; use a soft-sphere contact model or "
-                "remove periodic")
         motion = walls.arrays()[2]
         for k, plane in enumerate(walls.planes):
             if int(motion[k, 0]) != 0:
@@ -117,13 +112,18 @@ class HardSphereEngine(ParticleEngine):
         if st.n and not self.skin > 0:
             raise CaseError("neighbours.skin must be positive for the hard-sphere engine")
         self.max_events_per_step = 1_000_000 + 10_000 * st.n
+        self.box_lo = self.walls.period_lower.copy()
+        if self.periodic:
+            self._check_periodic(dmax)
+            wrap_positions(st.position, st.position.copy(), st.image, self.period, self.box_lo)
+        self._image_step = np.zeros((st.n, 3), np.int64)  # crossings of the periodic sides during one call
         self.time = 0.0
         self.steps = 0
         self.counters = np.zeros(K.N_COUNTERS, np.int64)
         self.energy = np.zeros(K.N_ENERGIES)
         self.last_collision = np.full(st.n, -np.inf)  # absolute time of each particle's last collision [s]
         self.ref_pos = st.position.copy()
-        self.nbr_start, self.nbr = K.build_neighbours(st.position, st.radius, self.skin, self.dim2)
+        self.nbr_start, self.nbr = self._neighbours(self.skin)
         self.up_start, self.up = K.upper_half(self.nbr_start, self.nbr)  # derived: each pair once
         self.event_log = np.zeros((0, 5))  # see record_collisions()
         self._work = None  # the kernel's work arrays (K.workspace), made at the first step
@@ -161,9 +161,36 @@ class HardSphereEngine(ParticleEngine):
                             f"model = 'hard_sphere' for every pair and wall")
         return law
 
+    def _check_periodic(self, dmax: float) -> None:
+        """Periodic sides: a box at least twice the cut-off 2 R_max + skin long on each periodic axis, so that a
+        pair meets through one image only (nearest image convention), and no gas (the coupling of a
+        periodic hard-sphere bed is not implemented)."""
+        axes = [a for a, length in zip("xyz", self.period) if length > 0.0]
+        if self.case.gas is not None:
+            raise CaseError(
+                f"walls: a box with periodic = {axes} and a gas; the hard-sphere engine (particles.contact.model = "
+                f"{self.case.particles.contact.model!r}) runs periodic sides without gas only; remove gas, remove "
+                "periodic or use a soft-sphere contact model")
+        need = 2.0 * (dmax + self.skin)
+        for d in np.flatnonzero(self.period > 0.0):
+            if self.period[d] < need:
+                ax = "xyz"[d]
+                raise CaseError(
+                    f"walls: the box is periodic along {ax} with length {self.period[d]:.4g} m, below twice the "
+                    f"neighbour cut-off (largest diameter {dmax:.4g} m + neighbours.skin {self.skin:.4g} m): "
+                    f"{need:.4g} m; make the box longer along {ax} or the skin smaller")
+
+    def _neighbours(self, skin: float) -> tuple[np.ndarray, np.ndarray]:
+        """The full neighbour list of the current positions with cut-off R_i + R_j + skin (by nearest image
+        across periodic sides)."""
+        st = self.state
+        if self.periodic:
+            return K.build_neighbours_periodic(st.position, st.radius, skin, self.dim2, self.period, self.box_lo)
+        return K.build_neighbours(st.position, st.radius, skin, self.dim2)
+
     def _touching_pairs(self) -> tuple[np.ndarray, np.ndarray]:
         st = self.state
-        rs, nbr = K.build_neighbours(st.position, st.radius, 0.0, self.dim2)
+        rs, nbr = self._neighbours(0.0)
         i = np.repeat(np.arange(st.n), np.diff(rs))
         j = nbr.astype(np.int64)
         keep = i < j
@@ -206,7 +233,11 @@ class HardSphereEngine(ParticleEngine):
             self.pw, self.wall_point0, self.wall_normal, self.gravity, self.ext_force, self.dim2, self.nbr_start,
             self.nbr, self.up_start, self.up, self.ref_pos, self.skin, self.last_collision, self.steps, self.dt, nsteps,
             self.max_events_per_step, self.counters, self.energy, self.event_log, info, self._work,
-            self.force_step == "split")
+            self.force_step == "split", self.period, self.box_lo, self._image_step)
+        if self.periodic:
+            if status == K.OK:  # a failed call left the positions as they were: its crossings do not count
+                st.image += self._image_step
+            self._image_step[...] = 0
         if status != K.OK:  # the kernel left the particle arrays as they were
             self.counters[...] = counters
             self.energy[...] = energy

@@ -269,7 +269,7 @@ class Wall(Strict):
     periodic: list[Literal["x", "y", "z"]] = Field(
         default_factory=list, description="box only: the axes whose two sides are joined instead of being walls; a "
         "particle leaving through one side re-enters through the other and particles interact across them by nearest "
-        "image (soft-sphere engine on the CPU). Not z in 2D; with [gas], the gas sides on that axis must be "
+        "image (soft-sphere engine on the CPU; hard-sphere engine without gas). Not z in 2D; with [gas], the gas sides on that axis must be "
         "periodic too")
     points: list[list[float]] | None = Field(
         None, description="[m] corners: polyline, its points [x, y] in the x-y plane, joined in order (2D); "

@@ -182,10 +182,13 @@ class HardSphereEngine(ParticleEngine):
 
     def _neighbours(self, skin: float) -> tuple[np.ndarray, np.ndarray]:
         """The full neighbour list of the current positions with cut-off R_i + R_j + skin (by nearest image
-        across periodic sides)."""
+        across periodic sides; the search takes the centres wrapped into the box, where they lie only at a
+        list rebuild)."""
         st = self.state
         if self.periodic:
-            return K.build_neighbours_periodic(st.position, st.radius, skin, self.dim2, self.period, self.box_lo)
+            pos = st.position.copy()
+            wrap_positions(pos, pos.copy(), np.zeros((st.n, 3), np.int64), self.period, self.box_lo)
+            return K.build_neighbours_periodic(pos, st.radius, skin, self.dim2, self.period, self.box_lo)
         return K.build_neighbours(st.position, st.radius, skin, self.dim2)
 
     def _touching_pairs(self) -> tuple[np.ndarray, np.ndarray]:

@@ -128,6 +128,24 @@ def test_restored_periodic_run_continues_bit_for_bit(tmp_path):
     assert again.energies() == whole.energies()
 
 
+def test_a_stopped_periodic_run_resumes_bit_for_bit(tmp_path, stopped_and_resumed):
+    """The same through ``Simulation``: a run stopped halfway and resumed from its checkpoint ends where the
+    run made in one go ends, image counts included."""
+    L = 5 * 5e-3
+    g = (np.arange(5) + 0.5) * 5e-3
+    pos = np.stack(np.meshgrid(g, g, g, indexing="ij"), -1).reshape(-1, 3)
+    vel = np.random.default_rng(7).normal(0.0, 1.0, pos.shape)
+    data = periodic_case_dict(tmp_path / "gas.csv", pos, vel, upper=(L, L, L), periodic=["x", "y"],
+                              contact=hard(0.8, 0.3, collapse_time=1e-5))
+    data["time"].update({"dt": 1e-4, "end": 0.02})
+    whole, _, again = stopped_and_resumed(validate_case(data), 0.01)
+    a, b = whole.engine, again.engine
+    assert a.steps == b.steps == 200 and a.collisions == b.collisions > 500 and a.wall_collisions > 0
+    assert np.any(a.state.image[:, :2] != 0) and np.all(a.state.image[:, 2] == 0)
+    for k in ("position", "velocity", "omega", "image"):
+        np.testing.assert_array_equal(getattr(b.state, k), getattr(a.state, k))
+
+
 def test_a_box_too_short_for_the_cut_off_is_refused(tmp_path):
     data = periodic_case_dict(tmp_path / "p.csv", [[D, D, D]], upper=(10 * D, 2.2 * D, 10 * D), periodic=["y"],
                               contact=hard())

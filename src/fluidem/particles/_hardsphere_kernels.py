@@ -23,7 +23,13 @@ Event scheme (all inside one step; nothing is predicted past its end):
   particle whose reference position is more than skin/2 (plus R) from every wall
   cannot touch a wall before its list is rebuilt, and its walls are not tested;
 * round-off: an approaching pair at or below contact distance, or a particle at
-  or behind a wall moving into it, collides at once (time 0), so no overlap grows.
+  or behind a wall moving into it, collides at once (time 0), so no overlap grows;
+* periodic box sides: the list is built by nearest image, and a pair's offset is
+  x_i − x_j plus its image shift, −L round((x_ref,i − x_ref,j) / L) from the reference
+  positions (``_image_shift``), in prediction and collision alike. Positions are
+  wrapped into the box only at list rebuilds, so the shift holds until the next one.
+  Without periodic sides the shift is never computed (a loop-invariant branch): the
+  same numbers as before.
 
 Inelastic collapse: the TC model (Luding & McNamara 1998, see
 ``contact/hard_sphere.py``) makes a collision elastic and frictionless when either

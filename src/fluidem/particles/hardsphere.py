@@ -231,6 +231,7 @@ class HardSphereEngine(ParticleEngine):
         info = np.zeros(3)
         if self._work is None or self._work[0].shape[0] != K.P_ROW * st.n:
             self._work = workspace(st.n)
+            self._image_step = np.zeros((st.n, 3), np.int64)
         nbr_start, nbr, up_start, up, status = K.advance(
             st.position, st.velocity, st.omega, st.radius, self.inv_mass, self.inv_inertia, st.species, self.pp,
             self.pw, self.wall_point0, self.wall_normal, self.gravity, self.ext_force, self.dim2, self.nbr_start,

@@ -9,12 +9,13 @@ load comes in impacts): the last two add up to 1 less the particles' mean accele
 ``--profile`` also prints the gas force over m g in layers of one diameter.
 
     python tests/validation/umf_budget.py [INFLOW_VOIDAGE] [MOMENTUM_EXCHANGE] [U] [--profile]
-        [--exchange-faces] [--no-pairing] [--centre] [--wide] [--frozen]
+        [--exchange-faces] [--no-pairing] [--centre] [--wide] [--frozen] [--3d]
 
 Options: ``--exchange-faces`` (``coupling.boundary_faces = "exchange"``), ``--no-pairing``
 (``coupling.pressure_pairing = false``), ``--centre`` (the pressure drop from the first row of centres
 instead of the inlet pressure extrapolated from the first two rows), ``--wide`` (the test's own 60 × 10 d
-bed of 12,000 spheres instead of the 20 × 5 d one), ``--frozen`` (``drag_update = "frozen"``). The last
+bed of 12,000 spheres instead of the 20 × 5 d one), ``--3d`` (the 3D gas grid's bed of
+test_umf_sweep_3d.py: 5120 spheres, 16 × 16 d with periodic sides, 4 × 15 × 4 cells), ``--frozen`` (``drag_update = "frozen"``). The last
 figure printed is the drag and pressure force the gas gave up (``GasCoupling.exchange_balance``; the
 pressure part only with pairing).
 
@@ -68,12 +69,19 @@ def from_first_centre(grid, p, height):
 
 
 def main(eps_in=1.0, exchange="particle", u=0.4, end=0.65, start=0.35, profile=False, faces="fold", pairing=True,
-         wide=False, update="substep"):
-    n, w, depth = (T.N, T.W, T.DEPTH) if wide else (2000, 20 * T.D, 5 * T.D)  # the 20 x 5 d bed: 5 x 15 cells of 4 d
-    c = T.sweep_case(n, w, depth).model_dump(mode="json", exclude_none=True)
+         wide=False, update="substep", three_d=False):
+    if three_d:  # the 3D-grid sweep's bed of test_umf_sweep_3d.py: 16 x 16 d, periodic sides, 4 x 15 x 4 cells
+        from test_umf_sweep_3d import N3, SIDE, sweep_case_3d
+
+        n, w, depth = N3, SIDE, SIDE
+        case = sweep_case_3d()
+    else:
+        n, w, depth = (T.N, T.W, T.DEPTH) if wide else (2000, 20 * T.D, 5 * T.D)  # the 20 x 5 d bed: 5 x 15 cells
+        case = T.sweep_case(n, w, depth)
+    c = case.model_dump(mode="json", exclude_none=True)
     bottom = c["gas"]["boundaries"]["bottom"]
     bottom["voidage"] = eps_in
-    bottom.pop("segments")  # the sweep's ramp, replaced by a ramp to u held from T_SETTLE + 0.1 s
+    bottom.pop("segments", None)  # the sweep's ramp, replaced by a ramp to u held from T_SETTLE + 0.1 s
     bottom["superficial"] = {"table": [[0.0, 0.0], [T.T_SETTLE, 0.0], [T.T_SETTLE + 0.1, u], [10.0, u]]}
     c["coupling"]["momentum_exchange"] = exchange
     c["coupling"]["boundary_faces"] = faces
@@ -122,4 +130,5 @@ if __name__ == "__main__":
     main(float(args[0]) if args else 1.0, args[1] if len(args) > 1 else "particle",
          float(args[2]) if len(args) > 2 else 0.4, profile="--profile" in sys.argv,
          faces="exchange" if "--exchange-faces" in sys.argv else "fold", pairing="--no-pairing" not in sys.argv,
-         wide="--wide" in sys.argv, update="frozen" if "--frozen" in sys.argv else "substep")
+         wide="--wide" in sys.argv, update="frozen" if "--frozen" in sys.argv else "substep",
+         three_d="--3d" in sys.argv)

@@ -30,10 +30,15 @@ gas / m g):
     --exchange-faces                         0.971, 0.939, 0.056 (96 %), 0.916
     inflow voidage 0.4 (``0.4 particle``)    0.971, 0.974, 0.025 (66 %), 0.974
     0.3 --wide                               0.968, 0.968, 0.028 (87 %), 0.968
+    0.35 --3d                                0.976, 0.975, 0.027 (46 %), 0.975
+    --3d                                     0.963, 0.962, 0.037 (48 %), 0.962
 
 With the defaults the budget closes: the gas gives up what the particles gain and Δp × A is that force;
 the floor's 2.5-3 % is what keeps the plateau below W/A, the load of particles falling back onto it in
-this slugging bed. Without pairing the gas's −ε∇p (mapped ε) gives up less pressure force than the
+this slugging bed. The 3D-grid bed's budget closes as well (gas force + floor = 1.002 and 0.999 m g at
+0.35 and 0.4 m/s): its floor carries 2.7 % and 3.7 % of the weight, touched in about half of the gas steps,
+and by height (``--profile`` at 0.35 m/s) the gas pushes the lowest 9 d at 1.05-1.18 × their weight and the
+top layers (16-24 d) at 0.35-0.91, as in the 2D-grid bed. Without pairing the gas's −ε∇p (mapped ε) gives up less pressure force than the
 particles gain; with the exchanged boundary faces the particles above the inflow hand 2 % of the drag to
 the inflow and more of the bed rests on the floor (and the extrapolated inlet pressure, which belongs to
 the folded faces' control volumes, no longer matches what the gas carries). With both (boundary faces

@@ -15,9 +15,9 @@ Options: ``--exchange-faces`` (``coupling.boundary_faces = "exchange"``), ``--no
 (``coupling.pressure_pairing = false``), ``--centre`` (the pressure drop from the first row of centres
 instead of the inlet pressure extrapolated from the first two rows), ``--wide`` (the test's own 60 × 10 d
 bed of 12,000 spheres instead of the 20 × 5 d one), ``--3d`` (the 3D gas grid's bed of
-test_umf_sweep_3d.py: 5120 spheres, 16 × 16 d with periodic sides, 4 × 15 × 4 cells), ``--frozen`` (``drag_update = "frozen"``). The last
-figure printed is the drag and pressure force the gas gave up (``GasCoupling.exchange_balance``; the
-pressure part only with pairing).
+test_umf_sweep_3d.py: 5120 spheres, 16 × 16 d with periodic sides, 4 × 15 × 4 cells), ``--frozen``
+(``drag_update = "frozen"``). The last figure printed is the drag and pressure force the gas gave up
+(``GasCoupling.exchange_balance``; the pressure part only with pairing).
 
 Measured (``python tests/validation/umf_budget.py 1.0 particle [U] [options]``, 0.4 m/s unless given;
 Δp / (W/A), gas force / m g, floor / m g (share of gas steps with the floor touched), given up by the
@@ -38,9 +38,9 @@ the floor's 2.5-3 % is what keeps the plateau below W/A, the load of particles f
 this slugging bed. The 3D-grid bed's budget closes as well (gas force + floor = 1.002 and 0.999 m g at
 0.35 and 0.4 m/s): its floor carries 2.7 % and 3.7 % of the weight, touched in about half of the gas steps,
 and by height (``--profile`` at 0.35 m/s) the gas pushes the lowest 9 d at 1.05-1.18 × their weight and the
-top layers (16-24 d) at 0.35-0.91, as in the 2D-grid bed. Without pairing the gas's −ε∇p (mapped ε) gives up less pressure force than the
-particles gain; with the exchanged boundary faces the particles above the inflow hand 2 % of the drag to
-the inflow and more of the bed rests on the floor (and the extrapolated inlet pressure, which belongs to
+top layers (16-24 d) at 0.35-0.91, as in the 2D-grid bed (test_umf_sweep_3d.py adds the floor's load to
+its plateau). Without pairing the gas's −ε∇p (mapped ε) gives up less pressure force than the particles
+gain; with the exchanged boundary faces the particles above the inflow hand 2 % of the drag to the inflow and more of the bed rests on the floor (and the extrapolated inlet pressure, which belongs to
 the folded faces' control volumes, no longer matches what the gas carries). With both (boundary faces
 exchanged, pressure unpaired): Δp / (W/A) 0.952-0.953, gas force 0.933-0.934 m g, floor 0.060-0.062 m g
 (touched in 75 % of the gas steps); by height (``--profile``) 0.87 and 0.94 in the two lowest diameters

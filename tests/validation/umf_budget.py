@@ -9,14 +9,15 @@ load comes in impacts): the last two add up to 1 less the particles' mean accele
 ``--profile`` also prints the gas force over m g in layers of one diameter.
 
     python tests/validation/umf_budget.py [INFLOW_VOIDAGE] [MOMENTUM_EXCHANGE] [U] [--profile]
-        [--exchange-faces] [--no-pairing] [--centre] [--wide] [--frozen]
+        [--exchange-faces] [--no-pairing] [--centre] [--wide] [--frozen] [--3d]
 
 Options: ``--exchange-faces`` (``coupling.boundary_faces = "exchange"``), ``--no-pairing``
 (``coupling.pressure_pairing = false``), ``--centre`` (the pressure drop from the first row of centres
 instead of the inlet pressure extrapolated from the first two rows), ``--wide`` (the test's own 60 × 10 d
-bed of 12,000 spheres instead of the 20 × 5 d one), ``--frozen`` (``drag_update = "frozen"``). The last
-figure printed is the drag and pressure force the gas gave up (``GasCoupling.exchange_balance``; the
-pressure part only with pairing).
+bed of 12,000 spheres instead of the 20 × 5 d one), ``--3d`` (the 3D gas grid's bed of
+test_umf_sweep_3d.py: 5120 spheres, 16 × 16 d with periodic sides, 4 × 15 × 4 cells), ``--frozen``
+(``drag_update = "frozen"``). The last figure printed is the drag and pressure force the gas gave up
+(``GasCoupling.exchange_balance``; the pressure part only with pairing).
 
 Measured (``python tests/validation/umf_budget.py 1.0 particle [U] [options]``, 0.4 m/s unless given;
 Δp / (W/A), gas force / m g, floor / m g (share of gas steps with the floor touched), given up by the
@@ -29,12 +30,17 @@ gas / m g):
     --exchange-faces                         0.971, 0.939, 0.056 (96 %), 0.916
     inflow voidage 0.4 (``0.4 particle``)    0.971, 0.974, 0.025 (66 %), 0.974
     0.3 --wide                               0.968, 0.968, 0.028 (87 %), 0.968
+    0.35 --3d                                0.976, 0.975, 0.027 (46 %), 0.975
+    --3d                                     0.963, 0.962, 0.037 (48 %), 0.962
 
 With the defaults the budget closes: the gas gives up what the particles gain and Δp × A is that force;
 the floor's 2.5-3 % is what keeps the plateau below W/A, the load of particles falling back onto it in
-this slugging bed. Without pairing the gas's −ε∇p (mapped ε) gives up less pressure force than the
-particles gain; with the exchanged boundary faces the particles above the inflow hand 2 % of the drag to
-the inflow and more of the bed rests on the floor (and the extrapolated inlet pressure, which belongs to
+this slugging bed. The 3D-grid bed's budget closes as well (gas force + floor = 1.002 and 0.999 m g at
+0.35 and 0.4 m/s): its floor carries 2.7 % and 3.7 % of the weight, touched in about half of the gas steps,
+and by height (``--profile`` at 0.35 m/s) the gas pushes the lowest 9 d at 1.05-1.18 × their weight and the
+top layers (16-24 d) at 0.35-0.91, as in the 2D-grid bed (test_umf_sweep_3d.py adds the floor's load to
+its plateau). Without pairing the gas's −ε∇p (mapped ε) gives up less pressure force than the particles
+gain; with the exchanged boundary faces the particles above the inflow hand 2 % of the drag to the inflow and more of the bed rests on the floor (and the extrapolated inlet pressure, which belongs to
 the folded faces' control volumes, no longer matches what the gas carries). With both (boundary faces
 exchanged, pressure unpaired): Δp / (W/A) 0.952-0.953, gas force 0.933-0.934 m g, floor 0.060-0.062 m g
 (touched in 75 % of the gas steps); by height (``--profile``) 0.87 and 0.94 in the two lowest diameters
@@ -68,12 +74,19 @@ def from_first_centre(grid, p, height):
 
 
 def main(eps_in=1.0, exchange="particle", u=0.4, end=0.65, start=0.35, profile=False, faces="fold", pairing=True,
-         wide=False, update="substep"):
-    n, w, depth = (T.N, T.W, T.DEPTH) if wide else (2000, 20 * T.D, 5 * T.D)  # the 20 x 5 d bed: 5 x 15 cells of 4 d
-    c = T.sweep_case(n, w, depth).model_dump(mode="json", exclude_none=True)
+         wide=False, update="substep", three_d=False):
+    if three_d:  # the 3D-grid sweep's bed of test_umf_sweep_3d.py: 16 x 16 d, periodic sides, 4 x 15 x 4 cells
+        from test_umf_sweep_3d import N3, SIDE, sweep_case_3d
+
+        n, w, depth = N3, SIDE, SIDE
+        case = sweep_case_3d()
+    else:
+        n, w, depth = (T.N, T.W, T.DEPTH) if wide else (2000, 20 * T.D, 5 * T.D)  # the 20 x 5 d bed: 5 x 15 cells
+        case = T.sweep_case(n, w, depth)
+    c = case.model_dump(mode="json", exclude_none=True)
     bottom = c["gas"]["boundaries"]["bottom"]
     bottom["voidage"] = eps_in
-    bottom.pop("segments")  # the sweep's ramp, replaced by a ramp to u held from T_SETTLE + 0.1 s
+    bottom.pop("segments", None)  # the sweep's ramp, replaced by a ramp to u held from T_SETTLE + 0.1 s
     bottom["superficial"] = {"table": [[0.0, 0.0], [T.T_SETTLE, 0.0], [T.T_SETTLE + 0.1, u], [10.0, u]]}
     c["coupling"]["momentum_exchange"] = exchange
     c["coupling"]["boundary_faces"] = faces
@@ -122,4 +135,5 @@ if __name__ == "__main__":
     main(float(args[0]) if args else 1.0, args[1] if len(args) > 1 else "particle",
          float(args[2]) if len(args) > 2 else 0.4, profile="--profile" in sys.argv,
          faces="exchange" if "--exchange-faces" in sys.argv else "fold", pairing="--no-pairing" not in sys.argv,
-         wide="--wide" in sys.argv, update="frozen" if "--frozen" in sys.argv else "substep")
+         wide="--wide" in sys.argv, update="frozen" if "--frozen" in sys.argv else "substep",
+         three_d="--3d" in sys.argv)

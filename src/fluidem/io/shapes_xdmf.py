@@ -24,7 +24,7 @@ import numpy as np
 
 from ..schedule import EveryTime
 from .atomic import write_text_atomic
-from .xdmf import XdmfIndex, document
+from .xdmf import XdmfIndex, document, drop_after
 
 SHAPES_SNAPSHOT_FILE = "shapes.h5"
 SHAPES_SNAPSHOT_INDEX = "shapes.xdmf"
@@ -77,9 +77,7 @@ class ShapeSnapshotWriter:
             return
         with h5py.File(self.path, "a") as f:
             grp = f.require_group("snapshots")
-            for k in list(grp):
-                if int(grp[k].attrs["step"]) > step:
-                    del grp[k]
+            drop_after(grp, step)
             times = self._times = _times(grp)
             counts = _counts(f) if "static" in f else (0, 0)
         self._index.forget()

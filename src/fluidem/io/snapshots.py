@@ -19,7 +19,7 @@ import numpy as np
 
 from ..schedule import EveryTime
 from .atomic import write_text_atomic
-from .xdmf import XdmfIndex, document
+from .xdmf import XdmfIndex, document, drop_after
 
 SNAPSHOT_FILE = "particles.h5"
 SNAPSHOT_INDEX = "particles.xdmf"
@@ -87,9 +87,7 @@ class ParticleWriter:
             return
         with h5py.File(self.path, "a") as f:
             grp = f.require_group("snapshots")
-            for k in list(grp):
-                if int(grp[k].attrs["step"]) > step:
-                    del grp[k]
+            drop_after(grp, step)
             times = self._times = _times(grp)
             fields = _field_layout(grp[times[-1][0]]) if times else None
         self._layout = None  # the next snapshot writes the index whole

@@ -22,6 +22,14 @@ HEADER = ('<?xml version="1.0" ?>\n<!DOCTYPE Xdmf SYSTEM "Xdmf.dtd" []>\n<Xdmf V
 FOOTER = "   </Grid>\n  </Domain>\n</Xdmf>\n"
 
 
+def drop_after(grp, step: int) -> None:
+    """Delete the snapshot groups of ``grp`` (an open HDF5 group of snapshots, each with a ``step``
+    attribute) written after ``step``: what a resumed run writes again."""
+    for k in list(grp):
+        if int(grp[k].attrs["step"]) > step:
+            del grp[k]
+
+
 def document(name: str, grids: list[str]) -> str:
     """The whole XDMF file: a temporal collection ``name`` of the ``<Grid>`` elements ``grids``."""
     return HEADER.format(name=name) + "".join(g + "\n" for g in grids) + FOOTER

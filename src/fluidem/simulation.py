@@ -182,9 +182,9 @@ class Simulation:
         if self.case.gas is None:
             return None
         if self.case.gas.grid.dimensions == 3:
-            from .coupling.exchange3d import GasCoupling3D
+            from .coupling.exchange3d_gpu import gas_coupling3d  # the GPU engine's particle side on the device
 
-            return GasCoupling3D(self.case, engine)
+            return gas_coupling3d(self.case, engine)
         from .coupling.exchange import GasCoupling
 
         return GasCoupling(self.case, engine)

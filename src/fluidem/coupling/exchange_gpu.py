@@ -19,15 +19,16 @@ from . import voidage as V
 from .voidage import SolidsMap
 
 
-def refusals(coupling) -> list[str]:
+def refusals(coupling, dimensions: int = 2) -> list[str]:
     """What in the coupling of a GPU engine keeps its particle side on the host, one line each (empty: the
-    device exchange runs it)."""
+    device exchange runs it). ``dimensions`` of the gas grid: in 3D both voidage methods ('centroid',
+    'volume') have device kernels (``exchange3d_gpu``)."""
     opts, out = coupling.options, []
     if opts.gpu_exchange == "host":
         out.append("coupling.gpu_exchange = 'host'")
     if coupling.exchange != "particle":
         out.append(f"coupling.momentum_exchange = {coupling.exchange!r} (the device runs 'particle')")
-    if coupling.mapping.method != "centroid":
+    if dimensions == 2 and coupling.mapping.method != "centroid":
         out.append(f"coupling.voidage.method = {coupling.mapping.method!r} (the device deposits by centre: "
                    "'centroid')")
     if coupling.polydisperse != "none":

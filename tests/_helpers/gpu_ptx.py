@@ -45,6 +45,22 @@ def coupling_signatures(VC, PC, T) -> dict:
     }
 
 
+def coupling3d_signatures(VC3, PC3, T) -> dict:
+    """{kernel: argument types} of the 3D gas coupling's device kernels as ``coupling.exchange3d_gpu`` launches
+    them."""
+    f1, f2, f3, i1 = T.float64[::1], T.float64[:, ::1], T.float64[:, :, ::1], T.int32[::1]
+    b, f = T.boolean, T.float64
+    return {
+        VC3.centroid_deposit3d: (f2, f2, f1, f, f, f, b) + (f3,) * 5,
+        VC3.volume_deposit3d: (f2, f2, f1) + (f,) * 6 + (b,) * 4 + (f3,) * 5,
+        VC3.zero3: (f3,),
+        PC3.deposit3d: (f1, f2, f2, f1, f1) + (f3,) * 5 + (f,) * 5 + (b,) * 4 + (f1,) + (f3,) * 7 + (b,) + (f3,) * 3
+        + (i1,),
+        PC3.forces_split3d: (f2, f2, f1, f1) + (f3,) * 4 + (f,) * 3 + (b,) * 5 + (f2, f1, f2),
+        PC3.forces3d: (f2, f2, f1, f1) + (f3,) * 4 + (f,) * 3 + (b,) * 5 + (f2, f2),
+    }
+
+
 def main(cc=(9, 0)) -> int:
     import numba.cuda.dispatcher as dispatcher
     from numba import cuda
@@ -56,8 +72,11 @@ def main(cc=(9, 0)) -> int:
     from fluidem.particles import _softsphere_cuda as SC
     from fluidem.coupling import _paired_cuda as PC
     from fluidem.coupling import _voidage_cuda as VC
+    from fluidem.coupling import _paired3d_cuda as PC3
+    from fluidem.coupling import _voidage3d_cuda as VC3
 
-    for kernel, sig in {**kernel_signatures(SC, NC, T), **coupling_signatures(VC, PC, T)}.items():
+    for kernel, sig in {**kernel_signatures(SC, NC, T), **coupling_signatures(VC, PC, T),
+                        **coupling3d_signatures(VC3, PC3, T)}.items():
         ptx, _ = cuda.compile_ptx(kernel.py_func, sig, cc=cc)
         print(f"{kernel.py_func.__name__}: {len(ptx)} characters of PTX for sm_{cc[0]}{cc[1]}")
     return 0

@@ -11,6 +11,10 @@
 #                   the coupling's particle side on the device, the same with it on the host
 #                   (coupling.gpu_exchange = "host"), and the CPU engine on one core; wall time, start-up,
 #                   particle/gas split and warm rate from each run's summary.json (tsuji_*/, tsuji_*.log)
+#   coupled3d.txt   the 3D coupled bubbling-3d bed (9240 spheres, 15 x 40 x 3 gas cells, exact-volume voidage)
+#                   over 0.005 s (50 gas steps): the GPU engine with the 3D coupling's particle side on the
+#                   device, and with it on the host (coupling.gpu_exchange = "host"); the same columns
+#                   (bubbling3d_*/, bubbling3d_*.log)
 #
 # Needs Python 3.12 with numpy, numba, numba-cuda, scipy, h5py and matplotlib (the device image has them)
 # plus pydantic and tomli-w. Where those two are missing and nothing can be downloaded, carry them as
@@ -22,7 +26,7 @@
 #       pydantic pydantic-core annotated-types typing-inspection tomli-w
 #
 # (one version of each; pydantic-core must be the one pydantic pins). The script installs .whl/*.whl into
-# /tmp/site when the folder exists. It takes about 8-11 minutes, most of it compiling the CPU kernels once
+# /tmp/site when the folder exists. It takes about 9-12 minutes, most of it compiling the CPU kernels once
 # and building the 1e7 bed; run it from the repository root:
 #
 #   bash benchmarks/gpu_device_check.sh
@@ -94,5 +98,27 @@ for name in ("tsuji_gpu_device", "tsuji_gpu_host", "tsuji_cpu"):
     s = json.loads(f.read_text())
     nan = float("nan")
     print(f"{name:<18}{s['wall_time_s']:>9.2f}{s.get('startup_s') or nan:>11.2f}{s['particle_time_s']:>12.2f}"
+          f"{s['gas_time_s']:>9.2f}{s.get('particle_steps_per_s') or nan:>24.4g}")
+EOF
+
+# the 3D coupled bed: GPU engine with the 3D coupling's particle side on the device, and on the host
+for mode in device host; do
+    python3 -m fluidem run bubbling-3d --until 0.005 --device gpu --set coupling.gpu_exchange=$mode -q \
+        --out "$OUT/bubbling3d_gpu_$mode" > "$OUT/bubbling3d_gpu_$mode.log" 2>&1
+done
+python3 - "$OUT" <<'EOF' 2>&1 | tee "$OUT/coupled3d.txt"
+import json, sys
+from pathlib import Path
+out = Path(sys.argv[1])
+print("bubbling-3d, 0.005 s simulated (50 gas steps on 15 x 40 x 3 cells, 9240 spheres)")
+print(f"{'run':<24}{'wall_s':>9}{'startup_s':>11}{'particle_s':>12}{'gas_s':>9}{'warm particle-steps/s':>24}")
+for name in ("bubbling3d_gpu_device", "bubbling3d_gpu_host"):
+    f = out / name / "summary.json"
+    if not f.exists():
+        print(f"{name:<24} no summary.json (see {name}.log)")
+        continue
+    s = json.loads(f.read_text())
+    nan = float("nan")
+    print(f"{name:<24}{s['wall_time_s']:>9.2f}{s.get('startup_s') or nan:>11.2f}{s['particle_time_s']:>12.2f}"
           f"{s['gas_time_s']:>9.2f}{s.get('particle_steps_per_s') or nan:>24.4g}")
 EOF

@@ -247,8 +247,8 @@ def test_coupled3d_run_device_matches_host(packing_case):
     """The GPU engine on a 3D gas grid with the coupling's particle side on the device (exact-volume map, drag,
     deposit, gas force: ``coupling.exchange3d_gpu``) against the same run with it on the host
     (``gpu_exchange = "host"``): over three gas steps of four sub-steps the particles and the gas agree to
-    round-off. The device's map of the final particles is the host's for both methods, both weightings, with
-    smoothing and clipping."""
+    round-off; a checkpoint's K_p goes back to the device. The device's map of the final particles is the
+    host's for both methods, both weightings, with smoothing and clipping."""
     from fluidem import Simulation
     from fluidem.case import validate_case
     from fluidem.coupling.voidage import VoidageMapping
@@ -276,6 +276,11 @@ def test_coupled3d_run_device_matches_host(packing_case):
     bal, ref = dev.gas.exchange_balance(), host.gas.exchange_balance()  # K_p fetched for the host's sums
     for k in ("gas", "boundary", "particles", "pressure_gas", "pressure_particles"):
         assert np.abs(bal[k] - ref[k]).max() <= 1e-9 * np.abs(ref[k]).max(), k
+    arrays = {k: np.array(v) for k, v in dev.gas.checkpoint_arrays().items()}  # a checkpoint's K_p to the device
+    data["coupling"]["gpu_exchange"] = "device"
+    again = Simulation(validate_case({**data, "device": "gpu"}))
+    again.gas.restore(arrays, dev.gas.checkpoint_scalars())
+    assert np.array_equal(again.gas._device.kp.copy_to_host(), arrays["coupling/kp"])
     cg, st = dev.gas, dev.state
     for mapping in (VoidageMapping(method="volume"), VoidageMapping(method="centroid", velocity_weighting="volume"),
                     VoidageMapping(method="volume", velocity_weighting="volume", smoothing_width=5e-3,

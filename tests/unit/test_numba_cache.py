@@ -19,7 +19,7 @@ def test_kernel_sources_are_the_compiled_files_and_what_they_import():
               "coupling/drag/gidaspow.py", "gas/_solver_kernels.py"):
         assert f in names, f"{f}: defines compiled functions"
     for f in ("particles/_softsphere_cuda.py", "particles/_neighbours_cuda.py", "coupling/_paired_cuda.py",
-              "coupling/_voidage_cuda.py"):
+              "coupling/_voidage_cuda.py", "coupling/_paired3d_cuda.py", "coupling/_voidage3d_cuda.py"):
         assert f in names, f"{f}: CUDA kernels, cached on disk"
     for f in ("particles/contact/base.py", "gas/grid.py"):  # constants frozen into compiled code (N_SLOTS, cell flags)
         assert f in names, f"{f}: imported by kernel files"

@@ -197,10 +197,10 @@ def test_cell_exchange_gas_loses_the_momentum_the_particles_gain():
     scale = np.abs(b["particles"]).max()
     assert scale > 1e-4, b  # N: the slip is large, so is the drag
     err = np.abs(b["gas"] + b["boundary"] - b["particles"]).max() / scale
-    assert err < 1e-12, (b, err)
+    assert err < 1e-12, (b, err)  # measured 1e-16
     assert np.abs(b["boundary"]).max() > 1e-6 * scale, b  # cells along walls and the inflow hand some to them
     perr = np.abs(b["pressure_gas"] - b["pressure_particles"]).max() / np.abs(b["pressure_particles"]).max()
-    assert perr < 1e-12, perr
+    assert perr < 1e-12, perr  # measured 3e-16
     assert cpl.last_beta.shape == cpl.grid.shape and cpl.last_beta.max() > 0.0
 
 
@@ -209,7 +209,7 @@ def test_unpaired_cell_beta_exchange_is_not_equal_and_opposite():
     cpl.gas_step()
     b = cpl.exchange_balance()
     err = np.abs(b["gas"] + b["boundary"] - b["particles"]).max() / np.abs(b["particles"]).max()
-    assert err > 1e-3, err
+    assert err > 1e-3, err  # measured 0.32
     assert "pressure_gas" not in b  # the gas keeps the mapped voidage in its pressure term
 
 
@@ -223,8 +223,8 @@ def test_closed_triply_periodic_box_conserves_momentum_with_the_cell_exchange(tm
         sim.advance(sim.gas.substeps)
         g, p = x_momentum(sim)
         worst = max(worst, abs(g + p - p0) / scale)
-    assert worst < 1e-12, worst
-    assert g > 0.05 * p0 > 0.0
+    assert worst < 1e-12, worst  # measured 6e-16
+    assert g > 0.05 * p0 > 0.0  # measured 0.16
     assert np.all(np.abs(sim.state.velocity[:, 1:]) < 1e-12)
 
 
@@ -234,4 +234,4 @@ def test_closed_triply_periodic_box_with_unpaired_exchange_loses_momentum(tmp_pa
     _, p0 = x_momentum(sim)
     sim.advance(20 * sim.gas.substeps)
     g, p = x_momentum(sim)
-    assert abs(g + p - p0) / scale > 1e-6
+    assert abs(g + p - p0) / scale > 1e-6  # measured 2e-4

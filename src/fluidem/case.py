@@ -573,7 +573,7 @@ class Case(Strict):
 
     def _check_gas3d(self, gravity: str) -> None:
         """ValueError where a case with a 3D gas grid cannot be coupled: 2D particles, gravity off the grid
-        axes, an exchange or voidage method the 3D coupling does not offer, particles outside the grid."""
+        axes, a voidage method the 3D coupling does not offer, particles outside the grid."""
         cells = list(self.gas.grid.cells)
         if self.particles.dimensions != 3:
             raise ValueError(f"gas.grid.cells = {cells} (a 3D gas grid) and particles.dimensions = 2: a 3D gas grid "
@@ -582,9 +582,6 @@ class Case(Strict):
         if sum(1 for g in self.gravity if g != 0.0) > 1:
             raise ValueError(f"{gravity} = {list(self.gravity)}: with a 3D gas grid gravity must lie along one grid "
                              "axis (one non-zero component, e.g. [0.0, 0.0, -9.81])")
-        if self.coupling.momentum_exchange != "particle":
-            raise ValueError(f"coupling.momentum_exchange = {self.coupling.momentum_exchange!r}: a 3D gas grid takes "
-                             "'particle' only (each particle's drag, paired with the gas)")
         check_method(self.coupling.voidage.method, 3)
         if self.coupling.voidage.to_3d:
             raise ValueError("coupling.voidage.to_3d = true: Hoomans 1996 eq. 49 converts a 2D area voidage; a 3D gas "

@@ -18,6 +18,12 @@ def test_a_3d_gas_grid_with_3d_particles_validates_with_gravity_along_any_axis()
         assert case.gas.grid.dimensions == 3 and case.coupling.momentum_exchange == "particle"
 
 
+@pytest.mark.parametrize("exchange", ["cell", "cell_beta"])
+def test_a_3d_gas_grid_takes_the_cell_exchanges(exchange):
+    case = validate_case(changed(("coupling", "momentum_exchange"), exchange))
+    assert case.gas.grid.dimensions == 3 and case.coupling.momentum_exchange == exchange
+
+
 def changed(path, value, axis=2):
     data = copy.deepcopy(settling3d_case(axis=axis))
     *head, last = path
@@ -31,7 +37,6 @@ def changed(path, value, axis=2):
 @pytest.mark.parametrize("path,value,message", [
     (("particles", "dimensions"), 2, "a 3D gas grid takes 3D particles"),
     (("gravity",), [0.0, -3.0, -9.0], "gravity must lie along one grid axis"),
-    (("coupling", "momentum_exchange"), "cell", "a 3D gas grid takes 'particle' only"),
     (("coupling", "voidage"), {"method": "area_volume"}, "on a 3D grid allowed are 'centroid' and 'volume'"),
     (("particles", "placement", "region_upper"), [0.15, 0.15, 0.35], "z from .* not within the gas grid"),
 ])

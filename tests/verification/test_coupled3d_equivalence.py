@@ -12,6 +12,7 @@ velocities to 1e-14 m/s, gas pressures to 1e-10 Pa and gas velocities to 1e-11 m
 1e-6 m/s and 1e-6 Pa, orders above the solver tolerance's effect and orders below any modelling difference.
 """
 import numpy as np
+import pytest
 
 from fluidem.case import validate_case
 from fluidem.simulation import Simulation
@@ -31,7 +32,7 @@ def positions(n=24, seed=4):
     return np.array(out)
 
 
-def case(write_particles, three):
+def case(write_particles, three, exchange="particle"):
     pos = positions()
     path = write_particles(pos, D)
     boundaries = {"left": {"kind": "wall"}, "right": {"kind": "wall"},
@@ -52,12 +53,15 @@ def case(write_particles, three):
         "time": {"end": 1.0},
         "gas": {"dt": 2e-4, "grid": grid, "properties": {"viscosity": 1.8e-5, "density": 1.2},
                 "boundaries": boundaries, "initial_velocity": [0.0, 1.2] + ([0.0] if three else [])},
-        "coupling": {"drag": "di_felice"},
+        "coupling": {"drag": "di_felice", "momentum_exchange": exchange},
     })
 
 
-def test_one_cell_deep_3d_grid_gives_the_2d_coupled_result(write_particles):
-    sims = [Simulation(case(write_particles, three)) for three in (False, True)]
+@pytest.mark.parametrize("exchange", ["particle", "cell"])
+def test_one_cell_deep_3d_grid_gives_the_2d_coupled_result(write_particles, exchange):
+    """"cell" as "particle": the cell β from the same cell voidage and slip (w = 0 and no z velocity in
+    the mid plane), the same face averages along x and y, and the same share of the cell's drag per sphere."""
+    sims = [Simulation(case(write_particles, three, exchange)) for three in (False, True)]
     assert sims[0].gas.substeps == sims[1].gas.substeps
     for sim in sims:
         sim.advance(25 * sim.gas.substeps)

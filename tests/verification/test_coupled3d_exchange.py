@@ -12,6 +12,10 @@ momentum (Sun 2007 eqs 28-29, Hoomans 1996 eqs 40-41 in 3D).
    every field uniform along x, so convection, pressure and stresses move no x momentum in or out; rows sit
    at different places in their cells and move at different speeds, so the gas velocity varies across rows
    and a particle's interpolated gas velocity differs from its cell's.
+4. The same two checks with ``momentum_exchange = "cell"`` (Sun 2007's cell β, eq. 33, shared in the cell), which
+   pairs drag and pressure force as "particle" does, and with the unpaired "cell_beta" (MFIX in Sun 2007), which
+   misses by percents in the balance and loses momentum in the box, as in 2D
+   (tests/verification/test_momentum_exchange.py).
 """
 from __future__ import annotations
 
@@ -82,7 +86,7 @@ def test_face_volumes_take_in_the_boundary_half_cells():
     assert vw[0, 0, 1] == vw[0, 0, 2] == 3.0
 
 
-def box_case(gravity=(0.0, -9.81, 0.0), faces="fold", exchange_z=False):
+def box_case(gravity=(0.0, -9.81, 0.0), faces="fold", exchange_z=False, exchange="particle"):
     """A 4 × 6 × 3 box: inflow at the bottom, pressure outlet at the top, walls around."""
     return validate_case({
         "name": "box-3d",
@@ -96,7 +100,7 @@ def box_case(gravity=(0.0, -9.81, 0.0), faces="fold", exchange_z=False):
                                "bottom": {"kind": "inflow", "superficial": 0.8, "voidage": 1.0},
                                "top": {"kind": "pressure_outlet"}, "front": {"kind": "wall"},
                                "back": {"kind": "wall"}}},
-        "coupling": {"drag": "di_felice", "boundary_faces": faces},
+        "coupling": {"drag": "di_felice", "boundary_faces": faces, "momentum_exchange": exchange},
     })
 
 
@@ -139,7 +143,7 @@ X_OFFSET = 0.45  # in cells; 20 gas steps move a particle < 2.4 mm, so each keep
 # crossing a face a step before the others would make the voidage uneven along x for that step)
 
 
-def periodic_case(tmp_path):
+def periodic_case(tmp_path, exchange="particle"):
     rows = []
     for r, ((fy, fz), vx) in enumerate(zip(ROW_YZ, ROW_VX)):
         j, k = divmod(r, NZ)
@@ -157,7 +161,7 @@ def periodic_case(tmp_path):
         "gas": {"dt": 1e-4, "grid": {"cells": [NX, NY, NZ], "size": [NX * DX, NY * DX, NZ * DX]},
                 "properties": {"viscosity": 0.05, "density": 1000.0},
                 "boundaries": {s: {"kind": "periodic"} for s in ("left", "right", "bottom", "top", "front", "back")}},
-        "coupling": {"drag": "di_felice", "drag_update": "frozen"},
+        "coupling": {"drag": "di_felice", "drag_update": "frozen", "momentum_exchange": exchange},
     })
 
 
@@ -184,3 +188,50 @@ def test_closed_triply_periodic_box_conserves_momentum(tmp_path):
     assert g > 0.05 * p0 > 0.0  # the gas took up a fair share of the particles' net momentum
     assert np.all(np.abs(sim.state.velocity[:, 1:]) < 1e-12)  # nothing pushed the particles across rows
     assert math.isfinite(sim.gas.last_info.mass_residual)
+
+
+def test_cell_exchange_gas_loses_the_momentum_the_particles_gain():
+    cpl = random_coupling(box_case(exchange="cell"))
+    cpl.gas_step()
+    b = cpl.exchange_balance()
+    scale = np.abs(b["particles"]).max()
+    assert scale > 1e-4, b  # N: the slip is large, so is the drag
+    err = np.abs(b["gas"] + b["boundary"] - b["particles"]).max() / scale
+    assert err < 1e-12, (b, err)  # measured 1e-16
+    assert np.abs(b["boundary"]).max() > 1e-6 * scale, b  # cells along walls and the inflow hand some to them
+    perr = np.abs(b["pressure_gas"] - b["pressure_particles"]).max() / np.abs(b["pressure_particles"]).max()
+    assert perr < 1e-12, perr  # measured 3e-16
+    assert cpl.last_beta.shape == cpl.grid.shape and cpl.last_beta.max() > 0.0
+
+
+def test_unpaired_cell_beta_exchange_is_not_equal_and_opposite():
+    cpl = random_coupling(box_case(exchange="cell_beta"))
+    cpl.gas_step()
+    b = cpl.exchange_balance()
+    err = np.abs(b["gas"] + b["boundary"] - b["particles"]).max() / np.abs(b["particles"]).max()
+    assert err > 1e-3, err  # measured 0.32
+    assert "pressure_gas" not in b  # the gas keeps the mapped voidage in its pressure term
+
+
+def test_closed_triply_periodic_box_conserves_momentum_with_the_cell_exchange(tmp_path):
+    sim = Simulation(periodic_case(tmp_path, "cell"))
+    scale = float(np.sum(sim.state.mass * np.abs(sim.state.velocity[:, 0])))
+    g0, p0 = x_momentum(sim)
+    assert g0 == 0.0
+    worst = 0.0
+    for _ in range(20):
+        sim.advance(sim.gas.substeps)
+        g, p = x_momentum(sim)
+        worst = max(worst, abs(g + p - p0) / scale)
+    assert worst < 1e-12, worst  # measured 6e-16
+    assert g > 0.05 * p0 > 0.0  # measured 0.16
+    assert np.all(np.abs(sim.state.velocity[:, 1:]) < 1e-12)
+
+
+def test_closed_triply_periodic_box_with_unpaired_exchange_loses_momentum(tmp_path):
+    sim = Simulation(periodic_case(tmp_path, "cell_beta"))
+    scale = float(np.sum(sim.state.mass * np.abs(sim.state.velocity[:, 0])))
+    _, p0 = x_momentum(sim)
+    sim.advance(20 * sim.gas.substeps)
+    g, p = x_momentum(sim)
+    assert abs(g + p - p0) / scale > 1e-6  # measured 2e-4

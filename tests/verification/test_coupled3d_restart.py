@@ -29,3 +29,23 @@ def test_resumed_coupled_3d_run_matches_the_uninterrupted_one(stopped_and_resume
     maps = RunData(tmp_path / "run").gas["voidage"]
     assert maps.shape[1:] == (g.cells[0], g.cells[1])
     np.testing.assert_allclose(maps, fields["voidage"].mean(axis=3), rtol=1e-15)
+
+
+def test_resumed_3d_run_with_the_cell_exchange_matches_the_uninterrupted_one(stopped_and_resumed, tmp_path):
+    """``momentum_exchange = "cell"``: the cell β and solids velocity of the gas step in progress, which the
+    sub-steps' forces read, are in the restart file (as in 2D)."""
+    import h5py
+
+    case = validate_case(settling3d_case(end=0.02, axis=1, momentum_exchange="cell"))
+    whole, first, again = stopped_and_resumed(case, 0.0105)
+    assert first.steps % first.gas.substeps != 0
+    with h5py.File(tmp_path / "run" / "restart.h5", "r") as f:
+        names = []
+        f.visit(names.append)
+    assert {"cell_beta", "solids_u", "solids_v", "solids_w"} <= {n.rsplit("/", 1)[-1] for n in names}, names
+    assert again.steps == whole.steps
+    for k in ("position", "velocity", "omega"):
+        assert np.array_equal(getattr(again.state, k), getattr(whole.state, k)), k
+    for k in ("p", "rho", "u", "v", "w", "voidage"):
+        assert np.array_equal(getattr(again.gas.state, k), getattr(whole.gas.state, k)), k
+    assert whole.state.velocity[0, 1] < -0.05

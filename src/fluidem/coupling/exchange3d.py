@@ -14,8 +14,14 @@ The stages of ``exchange.GasCoupling`` (read its module docstring) with a third 
 5. the DEM sub-steps (``drag_update``: "substep" with K_p, u_p and ∇p_p of the step and each sub-step's own
    velocity, or "frozen").
 
-Only the ``"particle"`` exchange is offered on a 3D grid (``"cell"`` and ``"cell_beta"`` are refused by the
-case); ``boundary_faces`` ("fold" or "exchange"), ``pressure_gradient_force``, ``pressure_pairing`` and the
+``momentum_exchange`` "cell" and "cell_beta" (``_exchange3d_kernels``) have the meaning they have in 2D: β per
+cell from the cell's ε and slip |u_c − v_s| (Sun 2007 eq. 33, u_c the centre mean of the cell's faces);
+"cell" gives the gas β and u_s averaged onto the faces of the three axes and shares the cell's drag
+β V_cell (u_c − v_s) among its particles in proportion to V_p (equal and opposite, with the pressure force
+paired as in "particle"); "cell_beta" gives the gas the cell β (averaged onto the faces by the solver) and each
+particle its own drag β V_p/(1 − ε)(u_p − v_p) at the trilinearly interpolated gas (``_paired3d_kernels.kp3d``,
+boundary faces not folded), not paired (MFIX in Sun 2007). ``boundary_faces`` ("fold" or "exchange", of the
+"particle" exchange), ``pressure_gradient_force``, ``pressure_pairing`` ("particle" and "cell") and the
 polydisperse drag work as in 2D. ``face_volumes3d`` gives the face control volumes (1.5 V_cell for the first
 interior faces along a non-periodic axis, which take in the boundary half cells).
 """
@@ -25,6 +31,7 @@ import numpy as np
 
 from ..gas import _layout3d as L3
 from ..gas.solver import GasState
+from . import _exchange3d_kernels as X3
 from . import _paired3d_kernels as P3
 from . import _voidage3d_kernels as VK3
 from .exchange import GasCoupling, substeps_per_gas_step
@@ -57,19 +64,18 @@ class GasCoupling3D(GasCoupling):
     """``GasCoupling`` of a case with a 3D gas grid and 3D particles (module docstring).
 
     ``last_map`` is the ``SolidsMap`` of the last gas step (with ``solids_w``), ``last_beta`` Σ_{p in cell} K_p /
-    V_cell (nx, ny, nz) [kg m^-3 s^-1] of that step and ``last_face_beta`` the (x, y, z) face β the gas took.
+    V_cell (nx, ny, nz) [kg m^-3 s^-1] of that step (the cell β of "cell" and "cell_beta") and ``last_face_beta``
+    the (x, y, z) face β the gas took (None for "cell_beta", whose gas took the cell β).
     """
 
     def __init__(self, case, engine):
         self.case, self.engine = case, engine
         self.section, self.options = case.gas, case.coupling
-        if self.options.momentum_exchange != "particle":
-            raise ValueError(f"coupling.momentum_exchange = {self.options.momentum_exchange!r}: a 3D gas grid takes "
-                             "'particle' only")
         self.solver = self.section.build(case.gravity)
         self.grid = gd = self.solver.grid
         self.drag = self.options.drag
         self._law = self.drag.pack()
+        self._gas_law = self.drag.gas_side().pack()  # the gas's law per cell ("cell", "cell_beta")
         self.mapping = self.options.voidage
         self.gas_dt = self.section.dt
         self.substeps = substeps_per_gas_step(self.gas_dt, engine.dt)
@@ -77,11 +83,13 @@ class GasCoupling3D(GasCoupling):
         engine.time = engine.steps * engine.dt
         st = engine.state
         self._set_volumes()
-        self.exchange = "particle"
-        self._split = self.options.drag_update == "substep" and hasattr(engine, "ext_damping")
+        self.exchange = self.options.momentum_exchange
+        paired = self.exchange == "particle"
+        self._split = self.options.drag_update == "substep" and hasattr(engine, "ext_damping") and paired
         self._periodic = tuple(bool(x) for x in self.solver.periodic)
-        self._fold = self.options.boundary_faces == "fold"
-        self._pair_pressure = bool(self.options.pressure_pairing) and bool(self.options.pressure_gradient_force)
+        self._fold = self.options.boundary_faces == "fold" and paired
+        self._pair_pressure = (bool(self.options.pressure_pairing) and bool(self.options.pressure_gradient_force)
+                               and self.exchange in ("particle", "cell"))
         shapes = [gd.face_shape(a) for a in range(3)]
         self._sums = tuple(np.zeros(shapes[a]) for a in range(3) for _ in range(2))  # A_x, B_x, A_y, B_y, A_z, B_z
         self._face_beta = tuple(np.zeros(s) for s in shapes)
@@ -117,8 +125,48 @@ class GasCoupling3D(GasCoupling):
             VK3.sauter_inverse3d(st.position, st.radius, self.volume, gd.dx, gd.dy, gd.dz, self._inv_dbar)
         return self.mapping.map_particles(gd, st.position, st.radius, self.volume, st.velocity, self._periodic)
 
-    def cell_beta(self, voidage, solids_u, solids_v):
-        raise ValueError("cell β (momentum_exchange 'cell' or 'cell_beta') is not offered on a 3D gas grid")
+    def cell_beta(self, voidage, solids_u, solids_v, solids_w=None):
+        """β per cell [kg m^-3 s^-1], (nx, ny, nz): Σ_p β/(1 − ε)(ε, |u_c − v_s|, d_p) V_p / V_cell (Sun 2007 eq. 33,
+        ``_exchange3d_kernels.cell_beta3d``); solids_w None: 0."""
+        gd, st, gs = self.grid, self._particles(), self.state
+        if solids_w is None:
+            solids_w = np.zeros(gd.shape)
+        fields = [np.ascontiguousarray(a, dtype=float) for a in (voidage, solids_u, solids_v, solids_w)]
+        if any(f.shape != gd.shape for f in fields):
+            raise ValueError(f"voidage, solids_u, solids_v, solids_w must have shape {gd.shape}; "
+                             f"got {', '.join(str(f.shape) for f in fields)}")
+        self._check_gas()
+        beta = np.empty(gd.shape)
+        bad = X3.cell_beta3d(self._gas_law, st.position, st.radius, self.volume, gs.u, gs.v, gs.w, gs.rho, *fields,
+                             self.solver.props.viscosity, self._inv_dbar, gd.dx, gd.dy, gd.dz, gd.cell_volume, beta)
+        if bad:
+            raise ValueError(f"cell β: drag arguments out of range for {bad} particles "
+                             "(voidage must lie in (0, 1], gas density > 0)")
+        return beta
+
+    def _cell_coefficients(self, smap) -> tuple:
+        """Stage 2 of "cell" and "cell_beta": (β, u_s, pressure voidage or None), β and u_s per face ("cell",
+        ``_exchange3d_kernels.cell_faces3d``) or per cell ("cell_beta", averaged onto the faces by the solver)."""
+        gd = self.grid
+        solids = (smap.solids_u, smap.solids_v, smap.solids_w)
+        cb = self.cell_beta(smap.voidage, *solids)
+        self._cell_inputs = (cb,) + tuple(solids)
+        if self.exchange == "cell":
+            X3.cell_faces3d(cb, *solids, *self._periodic, self._face_beta[0], self._face_solids[0],
+                            self._face_beta[1], self._face_solids[1], self._face_beta[2], self._face_solids[2])
+            beta, solids = self._face_beta, self._face_solids
+        else:
+            beta = cb
+        self.last_map = smap
+        self.last_face_beta = beta if isinstance(beta, tuple) else None
+        self.last_beta = cb
+        pv = None
+        if self._pair_pressure:
+            st = self._particles()
+            pv = self._pressure_voidage
+            X3.pressure_voidage3d(st.position, self.volume, gd.dx, gd.dy, gd.dz, *self._periodic, *self._face_volumes,
+                                  self.mapping.minimum_voidage, *pv)
+        return beta, solids, pv
 
     def _check_gas(self) -> None:
         """The kernels index the gas arrays by the grid's shape: refuse any other (checked once per set of arrays)."""
@@ -136,7 +184,9 @@ class GasCoupling3D(GasCoupling):
 
     def exchange_coefficients(self, smap) -> tuple:
         """Stage 2: (face β, face u_s, pressure voidage or None) of this gas step from each particle's drag
-        deposited on the faces (``_paired3d_kernels.deposit3d``)."""
+        deposited on the faces (``_paired3d_kernels.deposit3d``), or per cell ("cell", "cell_beta")."""
+        if self.exchange != "particle":
+            return self._cell_coefficients(smap)
         beta, solids = self._deposit(smap.voidage)
         self.last_map = smap
         self.last_face_beta = beta
@@ -214,10 +264,15 @@ class GasCoupling3D(GasCoupling):
 
     def _forces(self, out, total, pressure=None) -> None:
         pressure = self.options.pressure_gradient_force if pressure is None else pressure
-        if not self._paired_ready:
+        if self.exchange == "cell_beta" or not self._paired_ready:
             self._gas_forces(out, total, pressure)
             return
         self._check_gas()
+        if self.exchange == "cell":
+            st, gs, gd = self._particles(), self.state, self.grid
+            X3.cell_forces3d(st.position, st.velocity, self.volume, *self._cell_inputs, gs.u, gs.v, gs.w, gs.p, gd.dx,
+                             gd.dy, gd.dz, gd.cell_volume, *self._periodic, bool(pressure), out, total)
+            return
         self._forces_with_kp(out, total, pressure)
 
     def exchange_balance(self) -> dict[str, np.ndarray]:
@@ -226,7 +281,8 @@ class GasCoupling3D(GasCoupling):
         boundary faces the gas does not solve, ``particles`` Σ_p K_p (u_p − v_p); with ``pressure_pairing``
         also ``pressure_gas`` Σ over the solved faces of (1 − ε_p,f) V_f ∂p/∂x_f and ``pressure_particles``
         Σ_p V_p ∇p_p. gas + boundary = particles and pressure_gas = pressure_particles to round-off, at the end
-        of the gas step."""
+        of the gas step ("particle" and "cell"; for "cell" and "cell_beta" the gas's side is V_cell β_f (u_f − u_s,f)
+        with the face β and u_s it took, which "cell_beta" does not pair with the particles' drag)."""
         gd, gs = self.grid, self.state
         if self.last_beta is None:
             raise RuntimeError("exchange_balance: no gas step taken yet")
@@ -238,7 +294,14 @@ class GasCoupling3D(GasCoupling):
         gas, boundary, pgas = np.zeros(3), np.zeros(3), np.zeros(3)
         grads = self._face_gradients()
         for a in range(3):
-            f = self._sums[2 * a] * vel[a] - self._sums[2 * a + 1]
+            if self.exchange == "particle":
+                f = self._sums[2 * a] * vel[a] - self._sums[2 * a + 1]
+            elif self.exchange == "cell":
+                b = self._face_beta[a]
+                f = gd.cell_volume * (b * vel[a] - b * self._face_solids[a])
+            else:  # the cell β and u_s as the solver put them on the faces
+                b = self.solver._face("beta", self._cell_inputs[0], a)
+                f = gd.cell_volume * (b * vel[a] - b * self.solver._face("solids", self._cell_inputs[1 + a], a))
             kind = K[(L3.K_KIND, a) + tuple(slice(0, m) for m in gd.face_shape(a))]
             solved = kind == L3.SOLVED
             copy = kind == L3.COPY
@@ -282,8 +345,11 @@ class GasCoupling3D(GasCoupling):
     def checkpoint_arrays(self) -> dict[str, np.ndarray]:
         out = {f"gas/{k}": getattr(self.state, k) for k in GAS_KEYS_3D}
         out.update({f"gas_solver/{k}": v for k, v in self.solver.checkpoint_arrays().items()})
-        if self._paired_ready:
+        if self._paired_ready and self.exchange == "particle":
             out["coupling/kp"] = self._kp
+        if self._paired_ready and self.exchange == "cell":  # the cell β and u_s the sub-steps' forces read
+            out.update(zip(("coupling/cell_beta", "coupling/solids_u", "coupling/solids_v", "coupling/solids_w"),
+                           self._cell_inputs))
         if self._inv_dbar.shape[0] > 0:
             out["coupling/inv_dbar"] = self._inv_dbar
         return out
@@ -298,8 +364,12 @@ class GasCoupling3D(GasCoupling):
         self.courant_max = float(scalars.get("gas_courant_max", 0.0))
         self._set_volumes()
         self._paired_ready = False
-        if "coupling/kp" in arrays:
+        if self.exchange == "particle" and "coupling/kp" in arrays:
             self._kp = np.ascontiguousarray(arrays["coupling/kp"], dtype=float)
+            self._paired_ready = True
+        if self.exchange == "cell" and "coupling/cell_beta" in arrays:
+            self._cell_inputs = tuple(np.ascontiguousarray(arrays[f"coupling/{k}"], dtype=float)
+                                      for k in ("cell_beta", "solids_u", "solids_v", "solids_w"))
             self._paired_ready = True
         if self._inv_dbar.shape[0] > 0 and "coupling/inv_dbar" in arrays:
             self._inv_dbar = np.ascontiguousarray(arrays["coupling/inv_dbar"], dtype=float)

@@ -14,6 +14,8 @@ import numpy as np
 
 from ._multigrid3d_kernels import MGI_AGG, MGI_GAL, MGI_NB, NS
 
+SEMI_COARSENING = 0.6
+
 
 class Multigrid3D(NamedTuple):
     """The arrays of ``_multigrid3d_kernels.gmres`` and ``mg_setup`` (layout there) and ``ell``, the row and
@@ -22,6 +24,7 @@ class Multigrid3D(NamedTuple):
     MGL: np.ndarray
     MGI: np.ndarray
     MGA: np.ndarray
+    MGS: np.ndarray
     MGW: np.ndarray
     DLU: np.ndarray
     PIV: np.ndarray
@@ -52,14 +55,22 @@ def grid_neighbours(dims: tuple[int, int, int], periodic: tuple[bool, bool, bool
 
 
 def multigrid_arrays(dims: tuple[int, int, int], periodic: tuple[bool, bool, bool], indices: np.ndarray,
-                     indptr: np.ndarray, coarsest: int, restart: int) -> Multigrid3D | None:
+                     indptr: np.ndarray, coarsest: int, restart: int,
+                     weights: tuple[float, float, float] | None = None) -> Multigrid3D | None:
     """The ``Multigrid3D`` arrays of the 7-point matrix (CSC ``indices``, ``indptr``; unknown (i ny + j) nz + k
     is cell (i, j, k)) of an nx × ny × nz grid, periodic along the axes flagged in ``periodic``: levels down
     to at most ``coarsest`` cells, GMRES restarted every ``restart`` iterations. None if the matrix pattern
     is not the grid's 7-point one."""
     levels = [tuple(int(n) for n in dims)]
+    steps = []
+    w = [1.0, 1.0, 1.0] if weights is None else [float(v) for v in weights]
     while np.prod(levels[-1]) > coarsest and max(levels[-1]) > 1:
-        levels.append(tuple((n + 1) // 2 if n > 1 else 1 for n in levels[-1]))
+        d = levels[-1]
+        strong = max(w[q] for q in range(3) if d[q] > 1)
+        r = [2 if d[q] > 1 and w[q] >= SEMI_COARSENING * strong else 1 for q in range(3)]
+        w = [w[q] * r[(q + 1) % 3] * r[(q + 2) % 3] / r[q] for q in range(3)]
+        steps.append(r)
+        levels.append(tuple((n + r[q] - 1) // r[q] for q, n in enumerate(d)))
     sizes = [int(np.prod(d)) for d in levels]
     offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
     MGI = np.full((int(offsets[-1]), 13), -1, np.int64)
@@ -74,7 +85,7 @@ def multigrid_arrays(dims: tuple[int, int, int], periodic: tuple[bool, bool, boo
         if l + 1 == len(levels):
             break
         coarse = levels[l + 1]
-        factors = [2 if d[q] > 1 else 1 for q in range(3)]
+        factors = steps[l]
         MGL[4:7, l] = factors
         I, J, K = np.meshgrid(*(np.arange(n) for n in d), indexing="ij")
         agg = (((I // factors[0]) * coarse[1] + J // factors[1]) * coarse[2] + K // factors[2]).ravel()
@@ -98,5 +109,5 @@ def multigrid_arrays(dims: tuple[int, int, int], periodic: tuple[bool, bool, boo
         return None
     m = sizes[-1]
     N = int(offsets[-1])
-    return Multigrid3D(MGL, MGI, np.zeros((N, NS)), np.zeros((4, N)), np.zeros((m, m)), np.zeros(m, np.int64),
+    return Multigrid3D(MGL, MGI, np.zeros((N, NS)), np.zeros((N, NS + 1)), np.zeros((4, N)), np.zeros((m, m)), np.zeros(m, np.int64),
                        np.zeros((2 * (restart + 1), n)), np.zeros((restart + 4, restart + 1)), rows * NS + slot)

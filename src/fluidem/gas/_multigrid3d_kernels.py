@@ -30,6 +30,7 @@ MG_X, MG_B, MG_R, MG_IDIAG = 0, 1, 2, 3
 MGI_NB, MGI_GAL, MGI_AGG = 0, 6, 12
 NS = 7  # slots of a matrix row
 SWEEPS = 2  # Gauss-Seidel sweeps before and after the coarse correction
+CYCLES = 2  # cycles of the next coarser level per visit of a level: 1 a V-cycle, 2 a W-cycle
 
 
 @njit(cache=True, error_model="numpy")
@@ -166,9 +167,9 @@ def _mg_plane_gauss_seidel(MGL, MGI, MGS, X, B, l, i, forward):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _mg_plane_restrict(MGL, MGI, MGS, X, B, l, i):
-    """Adds Pᵀ (b - A x) of plane i of level l to b of level l + 1 (the coarse cell of (i, j, k) is
-    ((i // rx) b' + j // ry) c' + k // rz)."""
+def _mg_plane_restrict(MGL, MGI, MGS, X, B, BC, l, i):
+    """Adds Pᵀ (b - A x) of plane i of level l (x, b in X, B) to b of level l + 1 (in BC; the coarse cell of
+    (i, j, k) is ((i // rx) b' + j // ry) c' + k // rz)."""
     o0, a, b, c = MGL[0, l], MGL[1, l], MGL[2, l], MGL[3, l]
     rx, ry, rz = MGL[4, l], MGL[5, l], MGL[6, l]
     o1, bc, cc = MGL[0, l + 1], MGL[2, l + 1], MGL[3, l + 1]
@@ -181,12 +182,13 @@ def _mg_plane_restrict(MGL, MGI, MGS, X, B, l, i):
         for k in range(c):
             g = g0 + k
             r = B[g] - MGS[g, 0] * X[g] - _mg_row(MGI, MGS, X, o0, sa, sb, g, edge_ij or k == 0 or k == c - 1)
-            B[t0 + k // rz] += r
+            BC[t0 + k // rz] += r
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _mg_plane_prolong(MGL, X, l, i):
-    """x of plane i of level l += x of its coarse cells on level l + 1 (P: piecewise constant)."""
+def _mg_plane_prolong(MGL, X, XC, l, i):
+    """x of plane i of level l (in X) += x of its coarse cells on level l + 1 (in XC; P: piecewise
+    constant)."""
     o0, b, c = MGL[0, l], MGL[2, l], MGL[3, l]
     rx, ry, rz = MGL[4, l], MGL[5, l], MGL[6, l]
     o1, bc, cc = MGL[0, l + 1], MGL[2, l + 1], MGL[3, l + 1]
@@ -194,46 +196,58 @@ def _mg_plane_prolong(MGL, X, l, i):
         g0 = o0 + (i * b + j) * c
         t0 = o1 + ((i // rx) * bc + j // ry) * cc
         for k in range(c):
-            X[g0 + k] += X[t0 + k // rz]
+            X[g0 + k] += XC[t0 + k // rz]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _mg_plane_zero(MGL, X, l, i):
+    o0, b, c = MGL[0, l], MGL[2, l], MGL[3, l]
+    for g in range(o0 + i * b * c, o0 + (i + 1) * b * c):
+        X[g] = 0.0
 
 
 @njit(cache=True, error_model="numpy")
-def _mg_presmooth_restrict(MGL, MGI, MGS, X, B, l, wrap):
-    """SWEEPS forward Gauss-Seidel sweeps of level l from x = 0, then b of level l + 1 = Pᵀ (b - A x), in
-    one pass over the planes: sweep s updates plane t - s at step t (its lower neighbour plane has had
-    sweep s, its upper one sweep s - 1: the same updates as SWEEPS whole sweeps one after the other), and
-    the residual of plane t - SWEEPS, final by then, is restricted at once, while the planes are still in
-    the cache. ``wrap``: the level is periodic along x (plane 0's residual waits for the last plane)."""
-    o0, o1, o2, a = MGL[0, l], MGL[0, l + 1], MGL[0, l + 2], MGL[1, l]
-    for g in range(o0, o1):
-        X[g] = 0.0
+def _mg_presmooth_restrict(MGL, MGI, MGS, X, B, BC, l, wrap, zero):
+    """SWEEPS forward Gauss-Seidel sweeps of level l (x, b in X, B; from x = 0 if ``zero``), then b of
+    level l + 1 (in BC) = Pᵀ (b - A x), in one pass over the planes: sweep s updates plane t - s at step t
+    (its lower neighbour plane has had sweep s, its upper one sweep s - 1: the same updates as SWEEPS whole
+    sweeps one after the other), and the residual of plane t - SWEEPS, final by then, is restricted at
+    once, while the planes are still in the cache; x = 0 is set a plane ahead of the first sweep.
+    ``wrap``: the level is periodic along x (plane 0's residual waits for the last plane)."""
+    o1, o2, a = MGL[0, l + 1], MGL[0, l + 2], MGL[1, l]
     for g in range(o1, o2):
-        B[g] = 0.0
+        BC[g] = 0.0
+    if zero:
+        _mg_plane_zero(MGL, X, l, 0)
+        if wrap:
+            _mg_plane_zero(MGL, X, l, a - 1)
     for t in range(a + SWEEPS):
+        if zero and t + 1 < a:
+            _mg_plane_zero(MGL, X, l, t + 1)
         for s in range(SWEEPS):
             i = t - s
             if 0 <= i < a:
                 _mg_plane_gauss_seidel(MGL, MGI, MGS, X, B, l, i, True)
         i = t - SWEEPS
         if i >= (1 if wrap else 0):
-            _mg_plane_restrict(MGL, MGI, MGS, X, B, l, i)
+            _mg_plane_restrict(MGL, MGI, MGS, X, B, BC, l, i)
     if wrap:
-        _mg_plane_restrict(MGL, MGI, MGS, X, B, l, 0)
+        _mg_plane_restrict(MGL, MGI, MGS, X, B, BC, l, 0)
 
 
 @njit(cache=True, error_model="numpy")
-def _mg_prolong_postsmooth(MGL, MGI, MGS, X, B, l, wrap):
-    """x of level l += P x of level l + 1, then SWEEPS backward Gauss-Seidel sweeps, in one pass over the
-    planes from the last (each plane corrected just before the first sweep reads it; ``wrap``: periodic
-    along x, plane 0 corrected first as the last plane reads it)."""
+def _mg_prolong_postsmooth(MGL, MGI, MGS, X, B, XC, l, wrap):
+    """x of level l (in X) += P x of level l + 1 (in XC), then SWEEPS backward Gauss-Seidel sweeps, in one
+    pass over the planes from the last (each plane corrected just before the first sweep reads it;
+    ``wrap``: periodic along x, plane 0 corrected first as the last plane reads it)."""
     a = MGL[1, l]
-    _mg_plane_prolong(MGL, X, l, a - 1)
+    _mg_plane_prolong(MGL, X, XC, l, a - 1)
     if wrap and a > 1:
-        _mg_plane_prolong(MGL, X, l, 0)
+        _mg_plane_prolong(MGL, X, XC, l, 0)
     for t in range(a + SWEEPS - 1):
         i = a - 2 - t
         if i >= (1 if wrap else 0):
-            _mg_plane_prolong(MGL, X, l, i)
+            _mg_plane_prolong(MGL, X, XC, l, i)
         for s in range(SWEEPS):
             i = a - 1 - t + s
             if 0 <= i < a:
@@ -241,19 +255,12 @@ def _mg_prolong_postsmooth(MGL, MGI, MGS, X, B, l, wrap):
 
 
 @njit(cache=True, error_model="numpy")
-def mg_vcycle(MGL, MGI, MGA, MGS, MGW, DLU, PIV, b, x):
-    """x ≈ A^-1 b by one V-cycle (a fixed linear operator: the preconditioner of ``gmres``): on each level
-    SWEEPS forward Gauss-Seidel sweeps before the coarse correction, SWEEPS backward ones after it."""
+def _mg_coarsest(MGL, DLU, PIV, X, B):
+    """x = A^-1 b on the coarsest level: forward / back substitution with the pivots of DLU."""
     levels = MGL.shape[1] - 1
-    X, B = MGW[MG_X], MGW[MG_B]
-    n0 = MGL[0, 1]
-    for g in range(n0):
-        B[g] = b[g]
-    for l in range(levels - 1):
-        _mg_presmooth_restrict(MGL, MGI, MGS, X, B, l, MGL[1, l] > 1 and MGI[MGL[0, l], MGI_NB] >= 0)
     oc = MGL[0, levels - 1]
     m = MGL[0, levels] - oc
-    for i in range(m):  # coarsest: forward / back substitution with the pivots
+    for i in range(m):
         X[oc + i] = B[oc + i]
     for k in range(m):
         p = PIV[k]
@@ -269,10 +276,48 @@ def mg_vcycle(MGL, MGI, MGA, MGS, MGW, DLU, PIV, b, x):
         for j in range(k + 1, m):
             s -= DLU[k, j] * X[oc + j]
         X[oc + k] = s / DLU[k, k]
-    for l in range(levels - 2, -1, -1):
-        _mg_prolong_postsmooth(MGL, MGI, MGS, X, B, l, MGL[1, l] > 1 and MGI[MGL[0, l], MGI_NB] >= 0)
-    for g in range(n0):
-        x[g] = X[g]
+
+
+@njit(cache=True, error_model="numpy")
+def mg_cycle(MGL, MGI, MGA, MGS, MGW, DLU, PIV, b, x):
+    """x ≈ A^-1 b by one W-cycle (a fixed linear operator: the preconditioner of ``gmres``): on each level
+    SWEEPS forward Gauss-Seidel sweeps, CYCLES cycles of the next level on the restricted residual (one if
+    that level has more than a quarter of this one's cells, which keeps the work per cycle within twice
+    the finest level's; one on the coarsest, solved exactly), then SWEEPS backward sweeps. The finest level
+    works in b and x themselves, the others in MGW. Driven by a loop over the visit counts of the levels
+    (MGW[MG_R, :levels]), not by recursion."""
+    levels = MGL.shape[1] - 1
+    X, B, VISITS = MGW[MG_X], MGW[MG_B], MGW[MG_R]
+    top = levels - 1
+    l = 0
+    VISITS[0] = 0.0
+    down = True
+    while True:
+        if down:
+            if l == top:
+                _mg_coarsest(MGL, DLU, PIV, X, B)
+                down = False
+                continue
+            wrap = MGL[1, l] > 1 and MGI[MGL[0, l], MGI_NB] >= 0
+            if l == 0:
+                _mg_presmooth_restrict(MGL, MGI, MGS, x, b, B, l, wrap, True)
+            else:
+                _mg_presmooth_restrict(MGL, MGI, MGS, X, B, B, l, wrap, VISITS[l] == 0.0)
+            l += 1
+            VISITS[l] = 0.0  # its first cycle starts from x = 0
+        else:
+            if l == 0:
+                break
+            VISITS[l] += 1.0
+            if l < top and VISITS[l] < CYCLES and 4 * (MGL[0, l + 1] - MGL[0, l]) <= MGL[0, l] - MGL[0, l - 1]:
+                down = True  # again on level l, from where the last cycle left x
+                continue
+            l -= 1
+            wrap = MGL[1, l] > 1 and MGI[MGL[0, l], MGI_NB] >= 0
+            if l == 0:
+                _mg_prolong_postsmooth(MGL, MGI, MGS, x, b, X, l, wrap)
+            else:
+                _mg_prolong_postsmooth(MGL, MGI, MGS, X, B, X, l, wrap)
 
 
 @njit(cache=True, error_model="numpy")
@@ -322,7 +367,7 @@ def gmres(MGL, MGI, MGA, MGS, MGW, DLU, PIV, KRY, HES, b, x, target, max_iter):
         gv[0] = beta
         k_used = 0
         for k in range(m):
-            mg_vcycle(MGL, MGI, MGA, MGS, MGW, DLU, PIV, Vb[k], Zb[k])
+            mg_cycle(MGL, MGI, MGA, MGS, MGW, DLU, PIV, Vb[k], Zb[k])
             w = Vb[k + 1]
             mg_matvec(MGL, MGI, MGA, Zb[k], w)
             for jj in range(k + 1):  # modified Gram-Schmidt

@@ -181,7 +181,7 @@ def solve_matrices(grid: str, warmup: int, count: int, repeat: int) -> list[list
             xs.append(y)
         return its, xs
 
-    variants = {"fluidem multigrid + GMRES": lambda: ours(False),
+    variants = {"fluidem multigrid + GMRES": lambda: ours(),
                 "pyamg SA + GMRES, setup+solve": lambda: amg("gmres", False),
                 "pyamg SA + BiCGStab, setup+solve": lambda: amg("bicgstab", False),
                 "pyamg SA + GMRES, one setup for all": lambda: amg("gmres", True),

@@ -2,15 +2,23 @@
 box grid (optionally periodic along any axis): the 3D sibling of ``_multigrid_kernels.py``.
 
 ``mg_setup`` makes the hierarchy of a matrix given in CSC form (its entries mapped to grid rows by the
-caller, once per pattern: ``_multigrid3d.py``), ``gmres`` solves A x = b with one V-cycle
-(``mg_vcycle``) as right preconditioner. Nothing here knows the equations behind the matrix; the caller
-owns every array.
+caller, once per pattern: ``_multigrid3d.py``), ``gmres`` solves A x = b with one cycle (``mg_cycle``) as
+right preconditioner (the preconditioned vectors are kept, as flexible GMRES does). Nothing here knows the
+equations behind the matrix; the caller owns every array.
 
-Hierarchy: 2 × 2 × 2 cells per coarse cell (1 along an axis already one cell thick), piecewise-constant
-prolongation P, coarse matrices Pᵀ A P, which stay 7-point, with the coupling along each axis divided by
-that axis's aggregation factor and the row sums kept (see ``_mg_level_matrix``); symmetric Gauss-Seidel
-smoothing (a forward and a backward sweep) before and after the coarse correction; dense LU on the
-coarsest level. Layout, all levels concatenated (level l holds cells MGL[0, l] .. MGL[0, l + 1] - 1):
+Hierarchy: 2 cells per coarse cell along each axis that is aggregated (the caller picks them: the
+strongly coupled axes, semi-coarsening when the couplings differ; an axis one cell thick stays so),
+piecewise-constant prolongation P, coarse matrices Pᵀ A P, which stay 7-point, with the coupling along
+each axis divided by that axis's aggregation factor and the row sums kept (see ``_mg_level_matrix``: the
+over-correction that plain aggregation needs, Braess 1995; Notay 2010 §2); SWEEPS forward Gauss-Seidel
+sweeps before the coarse correction and SWEEPS backward ones after it, so that the cycle is symmetric;
+CYCLES (2: a W-cycle) visits of a coarse level per visit of its fine level where that costs at most half
+the fine level's work (the coarse level has at most a quarter of the cells), one elsewhere; dense LU on
+the coarsest level. The smoother reads single-precision copies of the rows (MGS: half the memory traffic
+of the float64 rows; the cycle is a preconditioner, GMRES works with A itself), and does its sweeps and the
+residual's restriction in one pass over the x-planes of a level (``_mg_presmooth_restrict``), so that
+each row is read from memory once per pass, not once per sweep. Layout, all levels concatenated (level l
+holds cells MGL[0, l] .. MGL[0, l + 1] - 1):
 
   MGL (7, levels + 1) int64: cell offsets; the grid size (a, b, c) of each level (cell (i b + j) c + k);
       the aggregation factors (rx, ry, rz) from level l to level l + 1
@@ -18,7 +26,9 @@ coarsest level. Layout, all levels concatenated (level l holds cells MGL[0, l] .
       Galerkin target of each of those 6 entries in MGA (flat index row * 7 + slot, slot 0 the diagonal;
       -1 none), and the coarse cell (local index) of this cell
   MGA (N, 7): matrix rows (diagonal, then the 6 neighbour coefficients)
-  MGW (4, N): x, b, r, 1 / diagonal
+  MGS (N, 8) float32: the rows of MGA, then 1 / diagonal
+  MGW (4, N): x, b (coarse levels; the finest level works in GMRES's vectors), the cycle's visit count of
+      each level (first entries), 1 / diagonal
   DLU (m, m) + PIV (m): dense LU of the coarsest level, partial pivoting
   KRY (2 (restart + 1), n): GMRES basis V and preconditioned vectors Z
   HES (restart + 4, restart + 1): Hessenberg matrix, then rows of Givens cosines, sines, rhs

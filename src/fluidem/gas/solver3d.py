@@ -9,8 +9,10 @@ with ``w`` (z velocity on z-faces) from t to t + dt; the particle side enters on
 ``_solver3d_kernels``; here the Newton iterations of a step are driven one kernel call at a time (a few
 calls per iteration, nothing per cell).
 
-The pressure corrections are solved (``linear_solver``) by GMRES with a 2 × 2 × 2 aggregation multigrid
-(``_multigrid3d_kernels``, 7-point stencil, cost about proportional to the number of cells; "multigrid")
+The pressure corrections are solved (``linear_solver``) by GMRES with an aggregation multigrid
+(``_multigrid3d_kernels``, 7-point stencil, 2 cells per coarse cell along the strongly coupled axes:
+``_multigrid3d.py``; 3 to 4 iterations per correction from 1e4 to 1e6 cells, the step's cost per cell
+1.6 to 2.2 times higher at 1e6 than at 1e4 cells, ``benchmarks/README.md``; "multigrid")
 or by SciPy's SuperLU ("superlu", its factors kept from step to step while the matrix changes by less
 than ``jacobian_reuse``); "auto" is the multigrid, which gives way to SuperLU if it fails. Measured on the
 3D bubbling bed of ``benchmarks/gas3d_step.py`` (ideal gas, moving voidage), the multigrid took less CPU

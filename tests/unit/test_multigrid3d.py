@@ -112,3 +112,15 @@ def test_the_vcycle_is_a_fixed_linear_operator():
     for rhs, out in ((u, mu), (v, mv), (2.0 * u - 3.0 * v, muv)):
         MK.mg_cycle(mg.MGL, mg.MGI, mg.MGA, mg.MGS, mg.MGW, mg.DLU, mg.PIV, rhs.copy(), out)
     assert np.allclose(muv, 2.0 * mu - 3.0 * mv, rtol=0.0, atol=1e-12 * np.abs(muv).max())
+
+
+def test_a_grid_as_small_as_the_coarsest_level_is_solved_exactly():
+    # 4 x 4 x 4 = 64 cells: one level, the dense LU; GMRES converges in one iteration
+    dims, spacing = (4, 4, 4), (0.25, 0.25, 0.25)
+    A = poisson(dims, spacing, shift=0.1)
+    exact = np.random.default_rng(4).standard_normal(A.shape[0])
+    b = A @ exact
+    its, x, mg = solve(A, dims, spacing, (False, False, False), b)
+    assert mg.MGL.shape[1] - 1 == 1
+    assert its == 1
+    assert np.abs(x - exact).max() < 1e-10 * np.abs(exact).max()

@@ -299,6 +299,13 @@ def mg_cycle(MGL, MGI, MGA, MGS, MGW, DLU, PIV, b, x):
     levels = MGL.shape[1] - 1
     X, B, VISITS = MGW[MG_X], MGW[MG_B], MGW[MG_R]
     top = levels - 1
+    if top == 0:  # one level: the grid is the coarsest, solved exactly
+        for g in range(b.size):
+            B[g] = b[g]
+        _mg_coarsest(MGL, DLU, PIV, X, B)
+        for g in range(b.size):
+            x[g] = X[g]
+        return
     l = 0
     VISITS[0] = 0.0
     down = True

@@ -8,9 +8,9 @@ the matrix along each axis (``weights``, face area / distance of the grid's cell
 the axes coupled at least SEMI_COARSENING times as strongly as the strongest (an axis one cell thick is
 never aggregated); a step of factors (r_x, r_y, r_z) scales the coupling along axis q by
 r_q+1 r_q+2 / r_q (face area over distance), so a grid of cells twice as tall as wide (y couplings 4 times
-weaker) coarsens 2 × 1 × 2 once, which evens the couplings, and 2 × 2 × 2 after. Pointwise Gauss-Seidel and aggregation both lose their grip on the weakly coupled axis of
-an anisotropic grid: on the benchmark bed of 100³ cells (couplings 4:1) full coarsening took 14 GMRES
-iterations to 1e-8, semi-coarsening 6. Array layout: the module docstring of ``_multigrid3d_kernels.py``.
+weaker) coarsens 2 × 1 × 2 once, which evens the couplings, and 2 × 2 × 2 after. Pointwise Gauss-Seidel
+and aggregation both lose their grip on the weakly coupled axis of an anisotropic grid: on the benchmark
+bed of 100³ cells (couplings 4:1) full coarsening took 14 GMRES iterations to 1e-8, semi-coarsening 6. Array layout: the module docstring of ``_multigrid3d_kernels.py``.
 """
 from __future__ import annotations
 

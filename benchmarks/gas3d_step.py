@@ -4,6 +4,7 @@
     python benchmarks/gas3d_step.py --grids 100x100x100 --repeat 1 --seconds 1 --warmup 2     # 1e6 cells
     python benchmarks/gas3d_step.py --grids 20x25x20 --linear-solver multigrid,superlu --repeat 3
     python benchmarks/gas3d_step.py --grids 10x12x10 --seconds 0.2 --repeat 1                 # a quick check
+    python benchmarks/gas3d_step.py --grids 20x25x20,40x60x40 --matrices 6 --repeat 3        # against pyamg
 
 Problem ``NXxNYxNZ``: a 3D bubbling bed, 0.2 m x 0.4 m x 0.2 m (y up), ideal gas, inflow at the bottom
 through influx cells of voidage 0.4: 0.6 m/s superficial background and a central circular jet of
@@ -18,6 +19,18 @@ solver once on a fresh solver: ``--warmup`` steps are not timed, then ``advance`
 (at least 3 steps). Printed per grid and solver: wall milliseconds per step (min, median, max over the
 rounds), the median CPU milliseconds and CPU microseconds per cell, pressure corrections and GMRES iterations
 per step.
+
+``--matrices K``: instead of whole steps, the linear solvers alone on the same matrices. The bed runs
+``--warmup`` steps, then the pressure-correction matrices and right-hand sides of the next steps are kept
+(K of them); each is solved to the target that ``GasSolver`` sets (``KRYLOV_REDUCTION_3D`` of the
+right-hand side's norm, or the absolute floor) by (a) fluidem's GMRES with the aggregation V-cycle
+(``_multigrid3d_kernels``: hierarchy made anew for every matrix, as the solver does) and (b) pyamg's smoothed
+aggregation (``smoothed_aggregation_solver``, its defaults: symmetric Gauss-Seidel, one V-cycle as
+preconditioner) inside SciPy's GMRES and BiCGStab (restart 30), with the pyamg hierarchy made for every
+matrix ("setup+solve") and, a lower bound for a scheme that would keep it, made once for the first of the K
+matrices and reused for all ("one setup for all").
+Printed per grid and solver: CPU microseconds per cell and solve (median over the rounds, each round
+all K matrices), iterations per solve, and the largest ||b - A x|| / target (<= 1: each reached its target).
 """
 from __future__ import annotations
 
@@ -97,6 +110,97 @@ def time_one(grid: str, seconds: float, warmup: int, linear_solver: str = "auto"
             "cells": nx * ny * nz}
 
 
+def capture(grid: str, warmup: int, count: int) -> tuple[list, np.ndarray, np.ndarray, object]:
+    """The bed on ``grid`` run ``warmup`` steps, then until ``count`` pressure corrections were solved: their
+    (matrix data, right-hand side, target), the CSC pattern and the solver's multigrid arrays."""
+    from fluidem.gas import _multigrid3d_kernels as MK
+
+    nx, ny, nz = (int(k) for k in grid.split("x"))
+    solver, state, step_args, dt = bed_problem(nx, ny, nz, "multigrid")
+    t = 0.0
+    for _ in range(warmup):
+        solver.advance(state, dt, t, **step_args(state, t, dt))
+        t += dt
+    kept, gmres = [], MK.gmres
+
+    def keep(*args):  # GasSolver3D._solve calls MK.gmres(..., rhs, dp, target, max_iter)
+        kept.append((solver.MAT[0].copy(), args[-4].copy(), float(args[-2])))
+        return gmres(*args)
+
+    MK.gmres = keep
+    try:
+        while len(kept) < count:
+            solver.advance(state, dt, t, **step_args(state, t, dt))
+            t += dt
+    finally:
+        MK.gmres = gmres
+    return kept[:count], solver._indices, solver._indptr, solver._mg
+
+
+def solve_matrices(grid: str, warmup: int, count: int, repeat: int) -> list[list]:
+    """Rows of the ``--matrices`` table for ``grid``."""
+    import pyamg
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+
+    from fluidem.gas import _multigrid3d_kernels as MK
+    from fluidem.gas.solver import KRYLOV_MAX
+
+    kept, indices, indptr, mg = capture(grid, warmup, count)
+    n = kept[0][1].size
+    x = np.zeros(n)
+
+    def ours():
+        its, xs = 0, []
+        for data, b, target in kept:
+            MK.mg_setup(data, mg.ell, mg.MGL, mg.MGI, mg.MGA, mg.MGS, mg.MGW, mg.DLU, mg.PIV)
+            its += MK.gmres(mg.MGL, mg.MGI, mg.MGA, mg.MGS, mg.MGW, mg.DLU, mg.PIV, mg.KRY, mg.HES, b, x, target,
+                            KRYLOV_MAX)
+            xs.append(x.copy())
+        return its, xs
+
+    def amg(method, reuse):
+        its, xs, ml = 0, [], None
+        for data, b, target in kept:
+            A = sp.csr_matrix(sp.csc_matrix((data, indices, indptr), shape=(n, n)))
+            if ml is None or not reuse:
+                ml = pyamg.smoothed_aggregation_solver(A)
+            calls = [0]
+
+            def cb(_):
+                calls[0] += 1
+
+            M = ml.aspreconditioner(cycle="V")
+            rtol = target / np.linalg.norm(b)
+            if method == "gmres":
+                y, _ = spla.gmres(A, b, rtol=rtol, atol=0.0, restart=30, maxiter=10, M=M, callback=cb,
+                                  callback_type="pr_norm")
+            else:
+                y, _ = spla.bicgstab(A, b, rtol=rtol, atol=0.0, maxiter=300, M=M, callback=cb)
+            its += calls[0]
+            xs.append(y)
+        return its, xs
+
+    variants = {"fluidem multigrid + GMRES": lambda: ours(),
+                "pyamg SA + GMRES, setup+solve": lambda: amg("gmres", False),
+                "pyamg SA + BiCGStab, setup+solve": lambda: amg("bicgstab", False),
+                "pyamg SA + GMRES, one setup for all": lambda: amg("gmres", True),
+                "pyamg SA + BiCGStab, one setup for all": lambda: amg("bicgstab", True)}
+    times = {k: [] for k in variants}
+    result = {}
+    for r in range(repeat):
+        for name in harness.round_order(list(variants), r):
+            c0 = time.process_time()
+            result[name] = variants[name]()
+            times[name].append(time.process_time() - c0)
+    worst = {}
+    for name, (_, xs) in result.items():  # ||b - A x|| / target, outside the timing
+        worst[name] = max(np.linalg.norm(b - sp.csc_matrix((data, indices, indptr), shape=(n, n)) @ y) / target
+                          for (data, b, target), y in zip(kept, xs))
+    return [[grid, n, name, 1e6 * float(np.median(times[name])) / (n * count), result[name][0] / count,
+             worst[name]] for name in variants]
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--grids", default="20x25x20,40x60x40")
@@ -104,11 +208,20 @@ def main(argv=None) -> int:
     ap.add_argument("--warmup", type=int, default=10, help="untimed steps of a fresh solver")
     ap.add_argument("--linear-solver", default="auto",
                     help="GasSolver linear_solver: auto, multigrid, superlu; a comma-separated list times each")
+    ap.add_argument("--matrices", type=int, default=0,
+                    help="time the linear solvers alone (fluidem's, pyamg's) on this many pressure corrections")
     harness.add_options(ap, repeat=3)
     a = ap.parse_args(argv)
     import fluidem
 
     print(f"fluidem from {fluidem.__file__}")
+    if a.matrices:
+        rows = []
+        for grid in [g for g in a.grids.split(",") if g]:
+            rows += solve_matrices(grid, a.warmup, a.matrices, a.repeat)
+        print(harness.format_table(["grid", "cells", "linear solver", "cpu us/cell/solve", "it/solve",
+                                    "max |r|/target"], rows))
+        return 0
     solvers = [s for s in a.linear_solver.split(",") if s]
     measurements, rows, ratio_lines = {}, [], []
     for grid in [g for g in a.grids.split(",") if g]:

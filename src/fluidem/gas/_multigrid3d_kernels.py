@@ -2,15 +2,23 @@
 box grid (optionally periodic along any axis): the 3D sibling of ``_multigrid_kernels.py``.
 
 ``mg_setup`` makes the hierarchy of a matrix given in CSC form (its entries mapped to grid rows by the
-caller, once per pattern: ``_multigrid3d.py``), ``gmres`` solves A x = b with one V-cycle
-(``mg_vcycle``) as right preconditioner. Nothing here knows the equations behind the matrix; the caller
-owns every array.
+caller, once per pattern: ``_multigrid3d.py``), ``gmres`` solves A x = b with one cycle (``mg_cycle``) as
+right preconditioner (the preconditioned vectors are kept, as flexible GMRES does). Nothing here knows the
+equations behind the matrix; the caller owns every array.
 
-Hierarchy: 2 × 2 × 2 cells per coarse cell (1 along an axis already one cell thick), piecewise-constant
-prolongation P, coarse matrices Pᵀ A P, which stay 7-point, with the coupling along each axis divided by
-that axis's aggregation factor and the row sums kept (see ``_mg_level_matrix``); symmetric Gauss-Seidel
-smoothing (a forward and a backward sweep) before and after the coarse correction; dense LU on the
-coarsest level. Layout, all levels concatenated (level l holds cells MGL[0, l] .. MGL[0, l + 1] - 1):
+Hierarchy: 2 cells per coarse cell along each axis that is aggregated (the caller picks them: the
+strongly coupled axes, semi-coarsening when the couplings differ; an axis one cell thick stays so),
+piecewise-constant prolongation P, coarse matrices Pᵀ A P, which stay 7-point, with the coupling along
+each axis divided by that axis's aggregation factor and the row sums kept (see ``_mg_level_matrix``: the
+over-correction that plain aggregation needs, Braess 1995; Notay 2010 §2); SWEEPS forward Gauss-Seidel
+sweeps before the coarse correction and SWEEPS backward ones after it, so that the cycle is symmetric;
+CYCLES (2: a W-cycle) visits of a coarse level per visit of its fine level where that costs at most half
+the fine level's work (the coarse level has at most a quarter of the cells), one elsewhere; dense LU on
+the coarsest level. The smoother reads single-precision copies of the rows (MGS: half the memory traffic
+of the float64 rows; the cycle is a preconditioner, GMRES works with A itself), and does its sweeps and the
+residual's restriction in one pass over the x-planes of a level (``_mg_presmooth_restrict``), so that
+each row is read from memory once per pass, not once per sweep. Layout, all levels concatenated (level l
+holds cells MGL[0, l] .. MGL[0, l + 1] - 1):
 
   MGL (7, levels + 1) int64: cell offsets; the grid size (a, b, c) of each level (cell (i b + j) c + k);
       the aggregation factors (rx, ry, rz) from level l to level l + 1
@@ -18,7 +26,9 @@ coarsest level. Layout, all levels concatenated (level l holds cells MGL[0, l] .
       Galerkin target of each of those 6 entries in MGA (flat index row * 7 + slot, slot 0 the diagonal;
       -1 none), and the coarse cell (local index) of this cell
   MGA (N, 7): matrix rows (diagonal, then the 6 neighbour coefficients)
-  MGW (4, N): x, b, r, 1 / diagonal
+  MGS (N, 8) float32: the rows of MGA, then 1 / diagonal
+  MGW (4, N): x, b (coarse levels; the finest level works in GMRES's vectors), the cycle's visit count of
+      each level (first entries), 1 / diagonal
   DLU (m, m) + PIV (m): dense LU of the coarsest level, partial pivoting
   KRY (2 (restart + 1), n): GMRES basis V and preconditioned vectors Z
   HES (restart + 4, restart + 1): Hessenberg matrix, then rows of Givens cosines, sines, rhs
@@ -29,6 +39,8 @@ from numba import njit
 MG_X, MG_B, MG_R, MG_IDIAG = 0, 1, 2, 3
 MGI_NB, MGI_GAL, MGI_AGG = 0, 6, 12
 NS = 7  # slots of a matrix row
+SWEEPS = 2  # Gauss-Seidel sweeps before and after the coarse correction
+CYCLES = 2  # cycles of the next coarser level per visit of a level: 1 a V-cycle, 2 a W-cycle
 
 
 @njit(cache=True, error_model="numpy")
@@ -62,9 +74,10 @@ def _mg_level_matrix(MGL, MGI, MGA, MGW, l):
 
 
 @njit(cache=True, error_model="numpy")
-def mg_setup(data, csc_ell, MGL, MGI, MGA, MGW, DLU, PIV):
+def mg_setup(data, csc_ell, MGL, MGI, MGA, MGS, MGW, DLU, PIV):
     """The multigrid hierarchy of the CSC matrix ``data`` (its entries go to MGA rows by ``csc_ell``: flat
-    index cell * 7 + slot); returns False if a diagonal or the coarsest LU is singular."""
+    index cell * 7 + slot), with the smoother's single-precision copy MGS; returns False if a diagonal or
+    the coarsest LU is singular."""
     levels = MGL.shape[1] - 1
     n0 = MGL[0, 1]
     flat = MGA.reshape(MGA.size)
@@ -82,6 +95,10 @@ def mg_setup(data, csc_ell, MGL, MGI, MGA, MGW, DLU, PIV):
         for g in range(MGL[0, l + 1], MGL[0, l + 2]):
             if not np.isfinite(MGW[MG_IDIAG, g]):
                 return False
+    for g in range(MGL[0, levels]):
+        for s in range(NS):
+            MGS[g, s] = MGA[g, s]
+        MGS[g, NS] = MGW[MG_IDIAG, g]
     oc = MGL[0, levels - 1]
     m = MGL[0, levels] - oc
     for i in range(m):
@@ -122,7 +139,7 @@ def mg_setup(data, csc_ell, MGL, MGI, MGA, MGW, DLU, PIV):
 @njit(cache=True, error_model="numpy", inline="always")
 def _mg_row(MGI, MGA, X, o0, sa, sb, g, edge):
     """Σ_d A[g, d] x[neighbour d] of cell g (local neighbours from MGI on the faces of the level's box,
-    else g ∓ sa, g ∓ sb, g ∓ 1 with sa = b c, sb = c)."""
+    else g ∓ sa, g ∓ sb, g ∓ 1 with sa = b c, sb = c); MGA: the float64 rows or the float32 MGS."""
     if edge:
         s = 0.0
         for d in range(6):
@@ -134,61 +151,126 @@ def _mg_row(MGI, MGA, X, o0, sa, sb, g, edge):
             + MGA[g, 5] * X[g - 1] + MGA[g, 6] * X[g + 1])
 
 
-@njit(cache=True, error_model="numpy")
-def _mg_gauss_seidel(MGL, MGI, MGA, MGW, l, forward):
-    """One Gauss-Seidel sweep of level l (cells in index order, forward or backward)."""
-    X, B, IDG = MGW[MG_X], MGW[MG_B], MGW[MG_IDIAG]
+@njit(cache=True, error_model="numpy", inline="always")
+def _mg_plane_gauss_seidel(MGL, MGI, MGS, X, B, l, i, forward):
+    """Gauss-Seidel update of the cells of plane i (x index) of level l, rows j then cells k in increasing
+    (``forward``) or decreasing order: x_g = (b_g - Σ_d A[g, d] x[neighbour d]) / A[g, g]."""
     o0, a, b, c = MGL[0, l], MGL[1, l], MGL[2, l], MGL[3, l]
     sa, sb = b * c, c
-    for ii in range(a):
-        i = ii if forward else a - 1 - ii
-        edge_i = i == 0 or i == a - 1
-        for jj in range(b):
-            j = jj if forward else b - 1 - jj
-            edge_ij = edge_i or j == 0 or j == b - 1
+    edge_i = i == 0 or i == a - 1
+    for jj in range(b):
+        j = jj if forward else b - 1 - jj
+        g0 = o0 + (i * b + j) * c
+        if edge_i or j == 0 or j == b - 1:
             for kk in range(c):
-                k = kk if forward else c - 1 - kk
-                g = o0 + (i * b + j) * c + k
-                X[g] = (B[g] - _mg_row(MGI, MGA, X, o0, sa, sb, g, edge_ij or k == 0 or k == c - 1)) * IDG[g]
+                g = g0 + (kk if forward else c - 1 - kk)
+                X[g] = (B[g] - _mg_row(MGI, MGS, X, o0, sa, sb, g, True)) * MGS[g, 7]
+        else:
+            g = g0 if forward else g0 + c - 1
+            X[g] = (B[g] - _mg_row(MGI, MGS, X, o0, sa, sb, g, True)) * MGS[g, 7]
+            for kk in range(1, c - 1):
+                g = g0 + (kk if forward else c - 1 - kk)
+                X[g] = (B[g] - _mg_row(MGI, MGS, X, o0, sa, sb, g, False)) * MGS[g, 7]
+            if c > 1:
+                g = g0 + c - 1 if forward else g0
+                X[g] = (B[g] - _mg_row(MGI, MGS, X, o0, sa, sb, g, True)) * MGS[g, 7]
 
 
-@njit(cache=True, error_model="numpy")
-def _mg_restrict_residual(MGL, MGI, MGA, MGW, l):
-    """b of level l + 1 = Pᵀ (b - A x) of level l."""
-    X, B = MGW[MG_X], MGW[MG_B]
+@njit(cache=True, error_model="numpy", inline="always")
+def _mg_plane_restrict(MGL, MGI, MGS, X, B, BC, l, i):
+    """Adds Pᵀ (b - A x) of plane i of level l (x, b in X, B) to b of level l + 1 (in BC; the coarse cell of
+    (i, j, k) is ((i // rx) b' + j // ry) c' + k // rz)."""
     o0, a, b, c = MGL[0, l], MGL[1, l], MGL[2, l], MGL[3, l]
+    rx, ry, rz = MGL[4, l], MGL[5, l], MGL[6, l]
+    o1, bc, cc = MGL[0, l + 1], MGL[2, l + 1], MGL[3, l + 1]
     sa, sb = b * c, c
-    o1, o2 = MGL[0, l + 1], MGL[0, l + 2]
-    for g in range(o1, o2):
-        B[g] = 0.0
-    for i in range(a):
-        edge_i = i == 0 or i == a - 1
-        for j in range(b):
-            edge_ij = edge_i or j == 0 or j == b - 1
-            for k in range(c):
-                g = o0 + (i * b + j) * c + k
-                r = B[g] - MGA[g, 0] * X[g] - _mg_row(MGI, MGA, X, o0, sa, sb, g, edge_ij or k == 0 or k == c - 1)
-                B[o1 + MGI[g, MGI_AGG]] += r
+    edge_i = i == 0 or i == a - 1
+    for j in range(b):
+        edge_ij = edge_i or j == 0 or j == b - 1
+        g0 = o0 + (i * b + j) * c
+        t0 = o1 + ((i // rx) * bc + j // ry) * cc
+        for k in range(c):
+            g = g0 + k
+            r = B[g] - MGS[g, 0] * X[g] - _mg_row(MGI, MGS, X, o0, sa, sb, g, edge_ij or k == 0 or k == c - 1)
+            BC[t0 + k // rz] += r
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _mg_plane_prolong(MGL, X, XC, l, i):
+    """x of plane i of level l (in X) += x of its coarse cells on level l + 1 (in XC; P: piecewise
+    constant)."""
+    o0, b, c = MGL[0, l], MGL[2, l], MGL[3, l]
+    rx, ry, rz = MGL[4, l], MGL[5, l], MGL[6, l]
+    o1, bc, cc = MGL[0, l + 1], MGL[2, l + 1], MGL[3, l + 1]
+    for j in range(b):
+        g0 = o0 + (i * b + j) * c
+        t0 = o1 + ((i // rx) * bc + j // ry) * cc
+        for k in range(c):
+            X[g0 + k] += XC[t0 + k // rz]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _mg_plane_zero(MGL, X, l, i):
+    o0, b, c = MGL[0, l], MGL[2, l], MGL[3, l]
+    for g in range(o0 + i * b * c, o0 + (i + 1) * b * c):
+        X[g] = 0.0
 
 
 @njit(cache=True, error_model="numpy")
-def mg_vcycle(MGL, MGI, MGA, MGW, DLU, PIV, b, x):
-    """x ≈ A^-1 b by one V-cycle (a fixed linear operator: the preconditioner of ``gmres``)."""
+def _mg_presmooth_restrict(MGL, MGI, MGS, X, B, BC, l, wrap, zero):
+    """SWEEPS forward Gauss-Seidel sweeps of level l (x, b in X, B; from x = 0 if ``zero``), then b of
+    level l + 1 (in BC) = Pᵀ (b - A x), in one pass over the planes: sweep s updates plane t - s at step t
+    (its lower neighbour plane has had sweep s, its upper one sweep s - 1: the same updates as SWEEPS whole
+    sweeps one after the other), and the residual of plane t - SWEEPS, final by then, is restricted at
+    once, while the planes are still in the cache; x = 0 is set a plane ahead of the first sweep.
+    ``wrap``: the level is periodic along x (plane 0's residual waits for the last plane)."""
+    o1, o2, a = MGL[0, l + 1], MGL[0, l + 2], MGL[1, l]
+    for g in range(o1, o2):
+        BC[g] = 0.0
+    if zero:
+        _mg_plane_zero(MGL, X, l, 0)
+        if wrap:
+            _mg_plane_zero(MGL, X, l, a - 1)
+    for t in range(a + SWEEPS):
+        if zero and t + 1 < a:
+            _mg_plane_zero(MGL, X, l, t + 1)
+        for s in range(SWEEPS):
+            i = t - s
+            if 0 <= i < a:
+                _mg_plane_gauss_seidel(MGL, MGI, MGS, X, B, l, i, True)
+        i = t - SWEEPS
+        if i >= (1 if wrap else 0):
+            _mg_plane_restrict(MGL, MGI, MGS, X, B, BC, l, i)
+    if wrap:
+        _mg_plane_restrict(MGL, MGI, MGS, X, B, BC, l, 0)
+
+
+@njit(cache=True, error_model="numpy")
+def _mg_prolong_postsmooth(MGL, MGI, MGS, X, B, XC, l, wrap):
+    """x of level l (in X) += P x of level l + 1 (in XC), then SWEEPS backward Gauss-Seidel sweeps, in one
+    pass over the planes from the last (each plane corrected just before the first sweep reads it;
+    ``wrap``: periodic along x, plane 0 corrected first as the last plane reads it)."""
+    a = MGL[1, l]
+    _mg_plane_prolong(MGL, X, XC, l, a - 1)
+    if wrap and a > 1:
+        _mg_plane_prolong(MGL, X, XC, l, 0)
+    for t in range(a + SWEEPS - 1):
+        i = a - 2 - t
+        if i >= (1 if wrap else 0):
+            _mg_plane_prolong(MGL, X, XC, l, i)
+        for s in range(SWEEPS):
+            i = a - 1 - t + s
+            if 0 <= i < a:
+                _mg_plane_gauss_seidel(MGL, MGI, MGS, X, B, l, i, False)
+
+
+@njit(cache=True, error_model="numpy")
+def _mg_coarsest(MGL, DLU, PIV, X, B):
+    """x = A^-1 b on the coarsest level: forward / back substitution with the pivots of DLU."""
     levels = MGL.shape[1] - 1
-    X, B = MGW[MG_X], MGW[MG_B]
-    n0 = MGL[0, 1]
-    for g in range(n0):
-        B[g] = b[g]
-    for l in range(levels - 1):
-        o0, o1 = MGL[0, l], MGL[0, l + 1]
-        for g in range(o0, o1):
-            X[g] = 0.0
-        _mg_gauss_seidel(MGL, MGI, MGA, MGW, l, True)
-        _mg_gauss_seidel(MGL, MGI, MGA, MGW, l, False)
-        _mg_restrict_residual(MGL, MGI, MGA, MGW, l)
     oc = MGL[0, levels - 1]
     m = MGL[0, levels] - oc
-    for i in range(m):  # coarsest: forward / back substitution with the pivots
+    for i in range(m):
         X[oc + i] = B[oc + i]
     for k in range(m):
         p = PIV[k]
@@ -204,14 +286,55 @@ def mg_vcycle(MGL, MGI, MGA, MGW, DLU, PIV, b, x):
         for j in range(k + 1, m):
             s -= DLU[k, j] * X[oc + j]
         X[oc + k] = s / DLU[k, k]
-    for l in range(levels - 2, -1, -1):
-        o0, o1 = MGL[0, l], MGL[0, l + 1]
-        for g in range(o0, o1):
-            X[g] += X[o1 + MGI[g, MGI_AGG]]
-        _mg_gauss_seidel(MGL, MGI, MGA, MGW, l, False)
-        _mg_gauss_seidel(MGL, MGI, MGA, MGW, l, True)
-    for g in range(n0):
-        x[g] = X[g]
+
+
+@njit(cache=True, error_model="numpy")
+def mg_cycle(MGL, MGI, MGA, MGS, MGW, DLU, PIV, b, x):
+    """x ≈ A^-1 b by one W-cycle (a fixed linear operator: the preconditioner of ``gmres``): on each level
+    SWEEPS forward Gauss-Seidel sweeps, CYCLES cycles of the next level on the restricted residual (one if
+    that level has more than a quarter of this one's cells, which keeps the work per cycle within twice
+    the finest level's; one on the coarsest, solved exactly), then SWEEPS backward sweeps. The finest level
+    works in b and x themselves, the others in MGW. Driven by a loop over the visit counts of the levels
+    (MGW[MG_R, :levels]), not by recursion."""
+    levels = MGL.shape[1] - 1
+    X, B, VISITS = MGW[MG_X], MGW[MG_B], MGW[MG_R]
+    top = levels - 1
+    if top == 0:  # one level: the grid is the coarsest, solved exactly
+        for g in range(b.size):
+            B[g] = b[g]
+        _mg_coarsest(MGL, DLU, PIV, X, B)
+        for g in range(b.size):
+            x[g] = X[g]
+        return
+    l = 0
+    VISITS[0] = 0.0
+    down = True
+    while True:
+        if down:
+            if l == top:
+                _mg_coarsest(MGL, DLU, PIV, X, B)
+                down = False
+                continue
+            wrap = MGL[1, l] > 1 and MGI[MGL[0, l], MGI_NB] >= 0
+            if l == 0:
+                _mg_presmooth_restrict(MGL, MGI, MGS, x, b, B, l, wrap, True)
+            else:
+                _mg_presmooth_restrict(MGL, MGI, MGS, X, B, B, l, wrap, VISITS[l] == 0.0)
+            l += 1
+            VISITS[l] = 0.0  # its first cycle starts from x = 0
+        else:
+            if l == 0:
+                break
+            VISITS[l] += 1.0
+            if l < top and VISITS[l] < CYCLES and 4 * (MGL[0, l + 1] - MGL[0, l]) <= MGL[0, l] - MGL[0, l - 1]:
+                down = True  # again on level l, from where the last cycle left x
+                continue
+            l -= 1
+            wrap = MGL[1, l] > 1 and MGI[MGL[0, l], MGI_NB] >= 0
+            if l == 0:
+                _mg_prolong_postsmooth(MGL, MGI, MGS, x, b, X, l, wrap)
+            else:
+                _mg_prolong_postsmooth(MGL, MGI, MGS, X, B, X, l, wrap)
 
 
 @njit(cache=True, error_model="numpy")
@@ -229,7 +352,7 @@ def mg_matvec(MGL, MGI, MGA, x, y):
 
 
 @njit(cache=True, error_model="numpy")
-def gmres(MGL, MGI, MGA, MGW, DLU, PIV, KRY, HES, b, x, target, max_iter):
+def gmres(MGL, MGI, MGA, MGS, MGW, DLU, PIV, KRY, HES, b, x, target, max_iter):
     """x ≈ A^-1 b by restarted GMRES with the V-cycle as right preconditioner, from x = 0, until
     ||b - A x||_2 <= target. Returns the iterations made, or -1 when ``max_iter`` were not enough."""
     n = b.size
@@ -261,7 +384,7 @@ def gmres(MGL, MGI, MGA, MGW, DLU, PIV, KRY, HES, b, x, target, max_iter):
         gv[0] = beta
         k_used = 0
         for k in range(m):
-            mg_vcycle(MGL, MGI, MGA, MGW, DLU, PIV, Vb[k], Zb[k])
+            mg_cycle(MGL, MGI, MGA, MGS, MGW, DLU, PIV, Vb[k], Zb[k])
             w = Vb[k + 1]
             mg_matvec(MGL, MGI, MGA, Zb[k], w)
             for jj in range(k + 1):  # modified Gram-Schmidt

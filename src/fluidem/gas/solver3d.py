@@ -9,8 +9,10 @@ with ``w`` (z velocity on z-faces) from t to t + dt; the particle side enters on
 ``_solver3d_kernels``; here the Newton iterations of a step are driven one kernel call at a time (a few
 calls per iteration, nothing per cell).
 
-The pressure corrections are solved (``linear_solver``) by GMRES with a 2 × 2 × 2 aggregation multigrid
-(``_multigrid3d_kernels``, 7-point stencil, cost about proportional to the number of cells; "multigrid")
+The pressure corrections are solved (``linear_solver``) by GMRES with an aggregation multigrid
+(``_multigrid3d_kernels``, 7-point stencil, 2 cells per coarse cell along the strongly coupled axes:
+``_multigrid3d.py``; 3 to 4 iterations per correction from 1e4 to 1e6 cells, the step's cost per cell
+1.6 to 2.2 times higher at 1e6 than at 1e4 cells, ``benchmarks/README.md``; "multigrid")
 or by SciPy's SuperLU ("superlu", its factors kept from step to step while the matrix changes by less
 than ``jacobian_reuse``); "auto" is the multigrid, which gives way to SuperLU if it fails. Measured on the
 3D bubbling bed of ``benchmarks/gas3d_step.py`` (ideal gas, moving voidage), the multigrid took less CPU
@@ -62,7 +64,6 @@ from .solver import (
     COARSEST,
     check_options,
     KRYLOV_MAX,
-    KRYLOV_REDUCTION,
     KRYLOV_RESTART,
     SCHEMES,
     SLOW_CONVERGENCE,
@@ -75,6 +76,10 @@ from .solver import (
 )
 
 LINEAR_SOLVERS_3D = ("auto", "multigrid", "superlu")
+# multigrid path: each correction is solved to this fraction of its residual (10 times tighter than 2D's
+# KRYLOV_REDUCTION: one more GMRES iteration, and the Newton iterations no longer stop on a pressure
+# correction left 1e-4 short, e.g. a closed box's hydrostatic profile off by 1e-9 Pa, not 1e-11)
+KRYLOV_REDUCTION_3D = 1e-5
 _LOW_SIDES = ("left", "bottom", "front")
 
 
@@ -267,7 +272,9 @@ class GasSolver3D(GasSolver):
         choice = "multigrid" if linear_solver == "auto" else linear_solver
         self._mg = None
         if choice == "multigrid":
-            self._mg = multigrid_arrays(gd.cells, self.periodic, self._indices, self._indptr, COARSEST, KRYLOV_RESTART)
+            h = gd.spacing
+            self._mg = multigrid_arrays(gd.cells, self.periodic, self._indices, self._indptr, COARSEST, KRYLOV_RESTART,
+                                        tuple(h[(q + 1) % 3] * h[(q + 2) % 3] / h[q] for q in range(3)))
             if self._mg is None:
                 choice = "superlu"
         self._solver = choice
@@ -518,11 +525,11 @@ class GasSolver3D(GasSolver):
             rhs[0] = 0.0
         if self._solver == "multigrid":
             mg = self._mg
-            if MK.mg_setup(data, mg.ell, mg.MGL, mg.MGI, mg.MGA, mg.MGW, mg.DLU, mg.PIV):
+            if MK.mg_setup(data, mg.ell, mg.MGL, mg.MGI, mg.MGA, mg.MGS, mg.MGW, mg.DLU, mg.PIV):
                 self._nfact += 1
-                target = max(KRYLOV_REDUCTION * float(np.linalg.norm(rhs)),
+                target = max(KRYLOV_REDUCTION_3D * float(np.linalg.norm(rhs)),
                              0.1 * self.tolerance * self._out[lay.O_QREF] / math.sqrt(rhs.size))
-                kits = MK.gmres(mg.MGL, mg.MGI, mg.MGA, mg.MGW, mg.DLU, mg.PIV, mg.KRY, mg.HES, rhs, self.dp, target,
+                kits = MK.gmres(mg.MGL, mg.MGI, mg.MGA, mg.MGS, mg.MGW, mg.DLU, mg.PIV, mg.KRY, mg.HES, rhs, self.dp, target,
                                 KRYLOV_MAX)
                 if kits >= 0:
                     self._krylov += kits

@@ -20,13 +20,24 @@ a cell edge, which a Gauss rule resolves only slowly; the closed form is exact t
 few transcendental calls per cell corner. Octants with a negative bound are reduced to non-negative ones
 by the sphere's mirror symmetry (1_{x > a} = 1 − 1_{−x > −a}); an unbounded axis leaves a spherical cap
 (two unbounded) or twice the octant at a = 0 (one unbounded).
+
+``volume_deposit`` evaluates ``corner_volume`` once per grid node around a sphere and sums each cell's
+eight corners from those values, in the order and with the signs of ``sphere_box_volume``, so each cell's
+volume is bitwise the one ``sphere_box_volume`` gives while a node shared by several cells is evaluated
+once (a sphere across three cell faces: 27 nodes instead of 8 × 8 corners). The per-particle work (the
+node values; for the centroid map each particle's cell) is done first, in chunks of ``CHUNK`` particles on
+Numba's threads (``prange``), into a scratch array ``work``; the sums onto the grid follow in one serial
+pass in particle order. Every number is computed as on one thread and added in the same
+order, so the maps are bitwise the same for any number of threads.
 """
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from ._voidage_kernels import cell_index
+
+CHUNK = 256  # particles per work item of the parallel passes
 
 
 @njit(cache=True, inline="always")
@@ -157,12 +168,78 @@ def _bounds(i, d, n, periodic):
     return lo, hi
 
 
+@njit(cache=True, inline="always")
+def _node(a0, m, d, n, periodic):
+    """Coordinate of node m of the cells a0, a0 + 1, … of one axis: the lower side of cell a0 (m = 0) or the upper
+    side of cell a0 + m − 1, as ``_bounds`` gives them."""
+    if m == 0:
+        lo, _ = _bounds(a0, d, n, periodic)
+        return lo
+    _, hi = _bounds(a0 + m - 1, d, n, periodic)
+    return hi
+
+
+@njit(cache=True, inline="always")
+def _axis_nodes(r, d, n, periodic):
+    """Most nodes along one axis around a sphere of radius r: the cells [x − r, x + r] can touch (at most
+    ⌊2r/d⌋ + 2, the margin covering round-off; at most n on a non-periodic axis) plus one."""
+    m = int(math.floor(2.0 * r / d + 1e-6)) + 2
+    if not periodic:
+        m = min(m, n)
+    return m + 1
+
+
 @njit(cache=True)
-def volume_deposit(position, radius, scale, velocity, dx, dy, dz, px, py, pz, out, ovx, ovy, ovz):
-    """Add scale[p] V_pc (and scale[p] V_pc v[p]) to every cell c that the sphere of p overlaps, V_pc the exact
-    volume of the sphere in the cell (``sphere_box_volume``; periodic axes wrapped, non-periodic edge cells
-    unbounded). position, velocity : (N, 3); radius, scale : (N,); out, ovx, ovy, ovz : (nx, ny, nz),
-    accumulated into."""
+def volume_stride(radius, dx, dy, dz, nx, ny, nz, px, py, pz):
+    """Node values kept per particle by ``volume_deposit``: Π over the axes of ``_axis_nodes`` at the largest
+    radius. ``volume_deposit`` takes a ``work`` of at least N × this (more is not used)."""
+    rmax = 0.0
+    for p in range(radius.shape[0]):
+        rmax = max(rmax, radius[p])
+    return _axis_nodes(rmax, dx, nx, px) * _axis_nodes(rmax, dy, ny, py) * _axis_nodes(rmax, dz, nz, pz)
+
+
+@njit(cache=True)
+def _corner_range(lo, hi, position, radius, dx, dy, dz, nx, ny, nz, px, py, pz, stride, corners):
+    """corners[p stride + (mx nb + my) nc + mz] = ``corner_volume`` at node (mx, my, mz) (``_node``) of the
+    na × nb × nc nodes of the cells that sphere p overlaps, for p in [lo, hi); nothing for a sphere inside
+    one cell or one whose nodes do not fit in ``stride`` (``_volume_add`` then takes ``sphere_box_volume``)."""
+    for p in range(lo, hi):
+        r = radius[p]
+        x = position[p, 0]
+        y = position[p, 1]
+        z = position[p, 2]
+        a0, a1 = _cell_range(x, r, dx, nx, px)
+        b0, b1 = _cell_range(y, r, dy, ny, py)
+        c0, c1 = _cell_range(z, r, dz, nz, pz)
+        if a0 == a1 and b0 == b1 and c0 == c1:
+            continue
+        na, nb, nc = a1 - a0 + 2, b1 - b0 + 2, c1 - c0 + 2
+        if na * nb * nc > stride:
+            continue
+        base = p * stride
+        for mi in range(na):
+            a = _node(a0, mi, dx, nx, px) - x
+            for mj in range(nb):
+                b = _node(b0, mj, dy, ny, py) - y
+                for mk in range(nc):
+                    c = _node(c0, mk, dz, nz, pz) - z
+                    corners[base + (mi * nb + mj) * nc + mk] = corner_volume(a, b, c, r)
+
+
+@njit(cache=True, parallel=True)
+def _corners_parallel(position, radius, dx, dy, dz, nx, ny, nz, px, py, pz, stride, corners):
+    """``_corner_range`` over all particles in chunks of CHUNK on all threads."""
+    n = position.shape[0]
+    for c in prange((n + CHUNK - 1) // CHUNK):
+        _corner_range(c * CHUNK, min(n, (c + 1) * CHUNK), position, radius, dx, dy, dz, nx, ny, nz, px, py, pz,
+                      stride, corners)
+
+
+@njit(cache=True)
+def _volume_add(position, radius, scale, velocity, dx, dy, dz, px, py, pz, stride, corners, out, ovx, ovy, ovz):
+    """The serial pass of ``volume_deposit``: each cell's V_pc as Σ ± the node values of its eight corners (the
+    order and signs of ``sphere_box_volume``), added in particle order."""
     nx, ny, nz = out.shape
     for p in range(position.shape[0]):
         r = radius[p]
@@ -180,13 +257,25 @@ def volume_deposit(position, radius, scale, velocity, dx, dy, dz, px, py, pz, ou
             ovy[i, j, k] += v * velocity[p, 1]
             ovz[i, j, k] += v * velocity[p, 2]
             continue
+        nb, nc = b1 - b0 + 2, c1 - c0 + 2
+        direct = (a1 - a0 + 2) * nb * nc > stride
+        base = p * stride
         for i in range(a0, a1 + 1):
             xl, xh = _bounds(i, dx, nx, px)
             for j in range(b0, b1 + 1):
                 yl, yh = _bounds(j, dy, ny, py)
                 for k in range(c0, c1 + 1):
-                    zl, zh = _bounds(k, dz, nz, pz)
-                    v = sphere_box_volume(x, y, z, r, xl, xh, yl, yh, zl, zh)
+                    if direct:
+                        zl, zh = _bounds(k, dz, nz, pz)
+                        v = sphere_box_volume(x, y, z, r, xl, xh, yl, yh, zl, zh)
+                    else:
+                        v = 0.0
+                        for s in range(2):
+                            for t in range(2):
+                                row = base + ((i - a0 + s) * nb + j - b0 + t) * nc + k - c0
+                                for u in range(2):
+                                    sign = 1.0 if (s + t + u) % 2 == 0 else -1.0
+                                    v += sign * corners[row + u]
                     if v > 0.0:
                         v *= scale[p]
                         ii, jj, kk = i % nx, j % ny, k % nz
@@ -197,14 +286,70 @@ def volume_deposit(position, radius, scale, velocity, dx, dy, dz, px, py, pz, ou
 
 
 @njit(cache=True)
-def centroid_deposit3d(position, weight, velocity, dx, dy, dz, out, ovx, ovy, ovz):
-    """Add weight[p] (and weight[p] v[p]) to the cell holding the centre of particle p (Sun 2007 eq. 34 in 3D);
-    centres outside count in the nearest edge cell. out, ovx, ovy, ovz : (nx, ny, nz), accumulated into."""
+def volume_deposit(position, radius, scale, velocity, dx, dy, dz, px, py, pz, out, ovx, ovy, ovz, work=None):
+    """Add scale[p] V_pc (and scale[p] V_pc v[p]) to every cell c that the sphere of p overlaps, V_pc the exact
+    volume of the sphere in the cell (``sphere_box_volume``, bitwise, from the node values of the module
+    docstring; periodic axes wrapped, non-periodic edge cells unbounded). position, velocity : (N, 3);
+    radius, scale : (N,); out, ovx, ovy, ovz : (nx, ny, nz), accumulated into. work : (≥ N ``volume_stride``,)
+    float64 scratch for the node values (allocated here if None or shorter)."""
     nx, ny, nz = out.shape
-    for p in range(position.shape[0]):
+    n = position.shape[0]
+    stride = volume_stride(radius, dx, dy, dz, nx, ny, nz, px, py, pz)
+    if work is None:
+        corners = np.empty(n * stride)
+    elif work.shape[0] < n * stride:
+        corners = np.empty(n * stride)
+    else:
+        corners = work
+    if n > CHUNK:
+        _corners_parallel(position, radius, dx, dy, dz, nx, ny, nz, px, py, pz, stride, corners)
+    else:
+        _corner_range(0, n, position, radius, dx, dy, dz, nx, ny, nz, px, py, pz, stride, corners)
+    _volume_add(position, radius, scale, velocity, dx, dy, dz, px, py, pz, stride, corners, out, ovx, ovy, ovz)
+
+
+@njit(cache=True)
+def _centroid_range(lo, hi, position, dx, dy, dz, nx, ny, nz, cells):
+    """cells[p] = (i ny + j) nz + k, the cell holding the centre of p (``cell_index``), for p in [lo, hi); stored
+    as float64, exact below 2^53."""
+    for p in range(lo, hi):
         i = cell_index(position[p, 0], 1.0 / dx, nx)
         j = cell_index(position[p, 1], 1.0 / dy, ny)
         k = cell_index(position[p, 2], 1.0 / dz, nz)
+        cells[p] = (i * ny + j) * nz + k
+
+
+@njit(cache=True, parallel=True)
+def _centroid_parallel(position, dx, dy, dz, nx, ny, nz, cells):
+    """``_centroid_range`` over all particles in chunks of CHUNK on all threads."""
+    n = position.shape[0]
+    for c in prange((n + CHUNK - 1) // CHUNK):
+        _centroid_range(c * CHUNK, min(n, (c + 1) * CHUNK), position, dx, dy, dz, nx, ny, nz, cells)
+
+
+@njit(cache=True)
+def centroid_deposit3d(position, weight, velocity, dx, dy, dz, out, ovx, ovy, ovz, work=None):
+    """Add weight[p] (and weight[p] v[p]) to the cell holding the centre of particle p (Sun 2007 eq. 34 in 3D);
+    centres outside count in the nearest edge cell. out, ovx, ovy, ovz : (nx, ny, nz), accumulated into.
+    work : (≥ N,) float64 scratch for the cells of the centres (allocated here if None or shorter)."""
+    nx, ny, nz = out.shape
+    n = position.shape[0]
+    if work is None:
+        cells = np.empty(n)
+    elif work.shape[0] < n:
+        cells = np.empty(n)
+    else:
+        cells = work
+    if n > CHUNK:
+        _centroid_parallel(position, dx, dy, dz, nx, ny, nz, cells)
+    else:
+        _centroid_range(0, n, position, dx, dy, dz, nx, ny, nz, cells)
+    nyz = ny * nz
+    for p in range(n):
+        c = int(cells[p])
+        i = c // nyz
+        j = (c - i * nyz) // nz
+        k = c - i * nyz - j * nz
         w = weight[p]
         out[i, j, k] += w
         ovx[i, j, k] += w * velocity[p, 0]
@@ -244,14 +389,15 @@ def diffuse3d(field, rx, ry, rz, px, py, pz, steps, work):
 
 @njit(cache=True)
 def deposit_solids3d(method, weighting, position, radius, volume, velocity, dx, dy, dz, px, py, pz, norm, frac,
-                     wsum, wvx, wvy, wvz):
+                     wsum, wvx, wvy, wvz, work=None):
     """Solids fraction ``frac`` (unsmoothed) and the velocity weights ``wsum``, ``wv*`` of each cell of a 3D grid.
 
     method 0 (centroid): V_p into the cell of the centre (Sun 2007 eq. 34); 3 (volume): the exact volume of
     the sphere in every cell it overlaps (``volume_deposit``). ``frac`` is the deposit over ``norm`` (V_cell).
     weighting 0 (number): wsum counts centres, wv* sum their velocities (Hoomans 1996 eq. 50); 1 (volume):
     wsum is the deposit and wv* the deposit-weighted velocities (Sun 2007 eq. 35).
-    position, velocity : (N, 3); radius, volume : (N,); the rest (nx, ny, nz), overwritten.
+    position, velocity : (N, 3); radius, volume : (N,); the rest (nx, ny, nz), overwritten. work : float64
+    scratch of the deposits (``volume_deposit``, ``centroid_deposit3d``), or None.
     """
     frac[:, :, :] = 0.0
     wvx[:, :, :] = 0.0
@@ -259,9 +405,9 @@ def deposit_solids3d(method, weighting, position, radius, volume, velocity, dx, 
     wvz[:, :, :] = 0.0
     n = position.shape[0]
     if method == 0:
-        centroid_deposit3d(position, volume, velocity, dx, dy, dz, frac, wvx, wvy, wvz)  # Sun 2007 eq. 34
+        centroid_deposit3d(position, volume, velocity, dx, dy, dz, frac, wvx, wvy, wvz, work)  # Sun 2007 eq. 34
     else:
-        volume_deposit(position, radius, np.ones(n), velocity, dx, dy, dz, px, py, pz, frac, wvx, wvy, wvz)
+        volume_deposit(position, radius, np.ones(n), velocity, dx, dy, dz, px, py, pz, frac, wvx, wvy, wvz, work)
     wsum[:, :, :] = frac
     frac[:, :, :] /= norm
     if weighting == 0:  # Hoomans 1996 eq. 50: by centres, each particle counts once
@@ -269,17 +415,18 @@ def deposit_solids3d(method, weighting, position, radius, volume, velocity, dx, 
         wvx[:, :, :] = 0.0
         wvy[:, :, :] = 0.0
         wvz[:, :, :] = 0.0
-        centroid_deposit3d(position, np.ones(n), velocity, dx, dy, dz, wsum, wvx, wvy, wvz)
+        centroid_deposit3d(position, np.ones(n), velocity, dx, dy, dz, wsum, wvx, wvy, wvz, work)
 
 
 @njit(cache=True)
 def map_solids3d(method, weighting, position, radius, volume, velocity, dx, dy, dz, px, py, pz, norm, rx, ry, rz,
-                 steps, min_voidage, voidage, solids_u, solids_v, solids_w):
+                 steps, min_voidage, voidage, solids_u, solids_v, solids_w, work=None):
     """The particle → grid map of ``VoidageMapping.map`` on a 3D grid; returns the number of clipped cells.
 
     ``deposit_solids3d``; then ``steps`` diffusion steps of the fraction (``diffuse3d``; 0: none);
     ε = 1 − fraction, raised to min_voidage where below it (and counted); solids velocity wv/wsum, 0 where
-    wsum = 0. voidage, solids_u, solids_v, solids_w : (nx, ny, nz) outputs.
+    wsum = 0. voidage, solids_u, solids_v, solids_w : (nx, ny, nz) outputs. work : float64 scratch of the
+    deposit, of at least N ``volume_stride`` (volume) or N (centroid) entries, or None (allocated here).
     """
     shape = voidage.shape
     frac = np.empty(shape)
@@ -288,7 +435,7 @@ def map_solids3d(method, weighting, position, radius, volume, velocity, dx, dy, 
     wvy = np.empty(shape)
     wvz = np.empty(shape)
     deposit_solids3d(method, weighting, position, radius, volume, velocity, dx, dy, dz, px, py, pz, norm, frac,
-                     wsum, wvx, wvy, wvz)
+                     wsum, wvx, wvy, wvz, work)
     if steps > 0:
         diffuse3d(frac, rx, ry, rz, px, py, pz, steps, np.empty(shape))
     nx, ny, nz = shape

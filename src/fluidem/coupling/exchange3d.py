@@ -90,6 +90,7 @@ class GasCoupling3D(GasCoupling):
         self._face_volumes = face_volumes3d(gd.shape, self._periodic, gd.cell_volume)
         self._kp = np.zeros(st.radius.shape)
         self._kp_cells = np.zeros(gd.shape)
+        self._map_work = np.empty(0)  # scratch of the particles → grid map (``_voidage3d_kernels.volume_deposit``)
         self._cell_inputs = None
         if hasattr(engine, "reorder_listeners"):
             engine.reorder_listeners.append(self._reorder)
@@ -115,7 +116,11 @@ class GasCoupling3D(GasCoupling):
         st, gd = self._particles(), self.grid
         if self._inv_dbar.shape[0] > 0:
             VK3.sauter_inverse3d(st.position, st.radius, self.volume, gd.dx, gd.dy, gd.dz, self._inv_dbar)
-        return self.mapping.map_particles(gd, st.position, st.radius, self.volume, st.velocity, self._periodic)
+        need = st.radius.shape[0] * VK3.volume_stride(st.radius, gd.dx, gd.dy, gd.dz, *gd.shape, *self._periodic)
+        if self._map_work.shape[0] < need:
+            self._map_work = np.empty(need)
+        return self.mapping.map_particles(gd, st.position, st.radius, self.volume, st.velocity, self._periodic,
+                                          self._map_work)
 
     def cell_beta(self, voidage, solids_u, solids_v):
         raise ValueError("cell β (momentum_exchange 'cell' or 'cell_beta') is not offered on a 3D gas grid")

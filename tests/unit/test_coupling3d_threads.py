@@ -15,7 +15,6 @@ import pytest
 from fluidem.coupling import _paired3d_kernels as P3
 from fluidem.coupling import _voidage3d_kernels as VK3
 from fluidem.coupling._voidage_kernels import cell_index
-from fluidem.coupling.drag import drag_laws
 
 CELLS = (6, 5, 4)
 SPACING = (2.0e-3, 2.4e-3, 2.2e-3)  # [m]
@@ -108,7 +107,7 @@ def test_volume_deposit_equals_the_serial_sums(periodic):
     pos, r, vel = packing()
     ref = reference_volume(pos, r, vel, periodic)
     stride = VK3.volume_stride(r, *SPACING, *CELLS, *periodic)
-    assert stride == 27  # spheres under one cell across: at most 2 cells, 3 nodes, per axis
+    assert stride == 27 + 1 + 4 * 8  # spheres under one cell across: at most 2 cells, 3 nodes, per axis
     for threads in (1, 2):
         for work in (np.empty(N * stride), None, np.empty(3)):
             got = with_threads(threads, volume_map, pos, r, vel, periodic, work)
@@ -159,7 +158,7 @@ def test_map_solids3d_same_on_one_and_two_threads(method, weighting):
     def run():
         out = [np.empty(CELLS) for _ in range(4)]
         clipped = VK3.map_solids3d(method, weighting, pos, r, vol, vel, *SPACING, True, False, True, cell,
-                                   0.1, 0.1, 0.1, 2, 0.3, *out, np.empty(N * 27))
+                                   0.1, 0.1, 0.1, 2, 0.3, *out, np.empty(N * 60))
         return clipped, out
 
     c1, one = with_threads(1, run)
@@ -167,3 +166,135 @@ def test_map_solids3d_same_on_one_and_two_threads(method, weighting):
     assert c1 == c2
     for a in range(4):
         assert np.array_equal(one[a], two[a])
+
+
+def gas_fields(seed=8):
+    """Random gas velocities on the faces, voidage in [0.4, 0.95], density and pressure at the centres."""
+    rng = np.random.default_rng(seed)
+    nx, ny, nz = CELLS
+    u = rng.normal(0.5, 0.4, (nx + 1, ny, nz))
+    v = rng.normal(1.0, 0.4, (nx, ny + 1, nz))
+    w = rng.normal(-0.2, 0.4, (nx, ny, nz + 1))
+    eps = rng.uniform(0.4, 0.95, CELLS)
+    rho = rng.uniform(1.1, 1.3, CELLS)
+    p = rng.normal(0.0, 50.0, CELLS)
+    return u, v, w, eps, rho, p
+
+
+def face_sums_reference(pos, vel, vol, kp, periodic, fold):
+    """A_f, B_f of the three face directions, Σ K_p of each cell and Σ_p w_pf V_p (∇p weights), added in particle
+    order with the weights of ``_paired3d_kernels._axis`` (the serial pass of ``deposit3d`` before the weights
+    were kept in a scratch)."""
+    nx, ny, nz = CELLS
+    shapes = [(nx + 1, ny, nz), (nx, ny + 1, nz), (nx, ny, nz + 1)]
+    A = [np.zeros(s) for s in shapes]
+    B = [np.zeros(s) for s in shapes]
+    E = [np.zeros(s) for s in shapes]
+    KC = np.zeros(CELLS)
+
+    def add(F, i, a, j, b, k, c, q):
+        for s in range(2):
+            for t in range(2):
+                for r in range(2):
+                    F[i[s], j[t], k[r]] += a[s] * b[t] * c[r] * q
+
+    for q in range(pos.shape[0]):
+        ax = [P3._axis(pos[q, m], 1.0 / SPACING[m], CELLS[m], periodic[m], fold) for m in range(3)]
+        g = [P3._face_axis(pos[q, m], 1.0 / SPACING[m], CELLS[m], periodic[m], True) for m in range(3)]
+        cn = [(a[0], a[1]) for a in ax]
+        cw = [(a[2], a[3]) for a in ax]
+        fn = [(a[4], a[5]) for a in ax]
+        fw = [(a[6], a[7]) for a in ax]
+        gn = [(a[0], a[1]) for a in g]
+        gw = [(a[2], a[3]) for a in g]
+        add(E[0], gn[0], gw[0], cn[1], cw[1], cn[2], cw[2], vol[q])
+        add(E[1], cn[0], cw[0], gn[1], gw[1], cn[2], cw[2], vol[q])
+        add(E[2], cn[0], cw[0], cn[1], cw[1], gn[2], gw[2], vol[q])
+        k = kp[q]
+        cell = tuple(min(max(int(pos[q, m] * (1.0 / SPACING[m])), 0), CELLS[m] - 1) for m in range(3))
+        KC[cell] += k
+        for m in range(3):
+            nodes = [fn[a] if a == m else cn[a] for a in range(3)]
+            wts = [fw[a] if a == m else cw[a] for a in range(3)]
+            add(A[m], nodes[0], wts[0], nodes[1], wts[1], nodes[2], wts[2], k)
+            add(B[m], nodes[0], wts[0], nodes[1], wts[1], nodes[2], wts[2], k * vel[q, m])
+    return A, B, KC, E
+
+
+@pytest.mark.parametrize("periodic", PERIODIC)
+@pytest.mark.parametrize("fold", [True, False])
+def test_deposit3d_and_forces_equal_the_serial_sums(periodic, fold):
+    """K_p of the whole set (parallel chunks) == K_p of each particle alone; the face sums, cell sums and pressure
+    voidage == the sums in particle order; the forces (plain and split) == each particle's alone; on 1 and 2
+    threads, with owned scratch and with scratch allocated inside."""
+    from fluidem.coupling.drag import drag_laws
+    from fluidem.coupling.exchange3d import face_volumes3d
+
+    pos, r, vel = packing(seed=12)
+    size = np.array(CELLS) * np.array(SPACING)
+    pos = np.ascontiguousarray(np.clip(pos, 0.0, size))  # centres in the box: the kernels clamp outside ones
+    vol = 4.0 / 3.0 * math.pi * r**3
+    u, v, w, eps, rho, p = gas_fields()
+    law = drag_laws.get("gidaspow")().pack()
+    mu, mv = 1.8e-5, 0.3
+    inv_dbar = np.zeros((0, 0, 0))
+    VF = face_volumes3d(CELLS, periodic, float(np.prod(SPACING)))
+    shapes = [f.shape for f in VF]
+
+    def kp_alone():
+        kp, valid = np.empty(N), np.empty(N, np.bool_)
+        for q in range(N):
+            P3.kp3d(law, pos[q:q + 1], vel[q:q + 1], r[q:q + 1], vol[q:q + 1], u, v, w, eps, rho, mu, inv_dbar,
+                    *SPACING, mv, *periodic, fold, kp[q:q + 1], valid[q:q + 1])
+        assert valid.all()
+        return kp
+
+    def deposit(scratch):
+        kp = np.empty(N)
+        sums = [np.empty(s) for s in shapes for _ in range(2)]
+        KC = np.empty(CELLS)
+        coef = [np.empty(s) for s in shapes for _ in range(2)]
+        E = [np.empty(s) for s in shapes]
+        extra = (np.empty(N, np.bool_), np.empty((N, P3.STENCIL_NODES), np.int64),
+                 np.empty((N, P3.STENCIL_WEIGHTS))) if scratch else ()
+        bad = P3.deposit3d(law, pos, vel, r, vol, u, v, w, eps, rho, mu, inv_dbar, *SPACING, mv, *periodic, fold, kp,
+                           *sums, KC, *VF, *coef, True, *E, *extra)
+        assert bad == 0
+        return kp, sums, KC, coef, E
+
+    kp_ref = kp_alone()
+    A, B, KC_ref, E_ref = face_sums_reference(pos, vel, vol, kp_ref, periodic, fold)
+    runs = [with_threads(t, deposit, s) for t in (1, 2) for s in (True, False)]
+    for kp, sums, KC, coef, E in runs:
+        assert np.array_equal(kp, kp_ref)
+        assert np.array_equal(KC, KC_ref)
+        for m in range(3):
+            assert np.array_equal(sums[2 * m], A[m]) and np.array_equal(sums[2 * m + 1], B[m])
+            assert np.array_equal(coef[2 * m], A[m] / VF[m])
+            assert np.array_equal(coef[2 * m + 1], np.where(A[m] > 0.0, B[m] / np.where(A[m] > 0, A[m], 1.0), 0.0))
+            assert np.array_equal(E[m], np.maximum(1.0 - E_ref[m] / VF[m], mv))
+
+    def forces(split):
+        out, total = np.zeros((N, 3)), np.ones((N, 3))
+        damp = np.full(N, 0.5)
+        if split:
+            P3.particle_forces_split3d(pos, vel, vol, kp_ref, u, v, w, p, *SPACING, *periodic, fold, True, out, damp,
+                                       total)
+        else:
+            P3.particle_forces3d(pos, vel, vol, kp_ref, u, v, w, p, *SPACING, *periodic, fold, True, out, total)
+        return out, total, damp
+
+    for split in (False, True):
+        ref = [np.zeros((N, 3)), np.ones((N, 3)), np.full(N, 0.5)]
+        for q in range(N):
+            s = slice(q, q + 1)
+            if split:
+                P3.particle_forces_split3d(pos[s], vel[s], vol[s], kp_ref[s], u, v, w, p, *SPACING, *periodic, fold,
+                                           True, ref[0][s], ref[2][s], ref[1][s])
+            else:
+                P3.particle_forces3d(pos[s], vel[s], vol[s], kp_ref[s], u, v, w, p, *SPACING, *periodic, fold, True,
+                                     ref[0][s], ref[1][s])
+        for t in (1, 2):
+            got = with_threads(t, forces, split)
+            for a in range(3):
+                assert np.array_equal(got[a], ref[a]), (split, t, a)

@@ -25,9 +25,9 @@ by the sphere's mirror symmetry (1_{x > a} = 1 − 1_{−x > −a}); an unbounde
 eight corners from those values, in the order and with the signs of ``sphere_box_volume``, so each cell's
 volume is bitwise the one ``sphere_box_volume`` gives while a node shared by several cells is evaluated
 once (a sphere across three cell faces: 27 nodes instead of 8 × 8 corners). The per-particle work (the
-node values; for the centroid map each particle's cell) is done first, in chunks of ``CHUNK`` particles on
-Numba's threads (``prange``), into a scratch array ``work``; the sums onto the grid follow in one serial
-pass in particle order. Every number is computed as on one thread and added in the same
+node values and each cell's volume; for the centroid map each particle's cell) is done first, in chunks of
+``CHUNK`` particles on Numba's threads (``prange``), into a scratch array ``work``; the sums onto the grid
+follow in one serial pass in particle order. Every number is computed as on one thread and added in the same
 order, so the maps are bitwise the same for any number of threads.
 """
 import math
@@ -180,30 +180,43 @@ def _node(a0, m, d, n, periodic):
 
 
 @njit(cache=True, inline="always")
-def _axis_nodes(r, d, n, periodic):
-    """Most nodes along one axis around a sphere of radius r: the cells [x − r, x + r] can touch (at most
-    ⌊2r/d⌋ + 2, the margin covering round-off; at most n on a non-periodic axis) plus one."""
+def _axis_cells(r, d, n, periodic):
+    """Most cells along one axis that [x − r, x + r] can touch: ⌊2r/d⌋ + 2 (the margin covering round-off), at
+    most n on a non-periodic axis."""
     m = int(math.floor(2.0 * r / d + 1e-6)) + 2
     if not periodic:
         m = min(m, n)
-    return m + 1
+    return m
+
+
+@njit(cache=True)
+def _volume_layout(radius, dx, dy, dz, nx, ny, nz, px, py, pz):
+    """(nodes, stride) of the scratch of ``volume_deposit`` per particle: room for the node values of the most
+    cells a sphere of the largest radius can overlap, then a count and (i, j, k, V) of each of those cells."""
+    rmax = 0.0
+    for p in range(radius.shape[0]):
+        rmax = max(rmax, radius[p])
+    ma, mb, mc = _axis_cells(rmax, dx, nx, px), _axis_cells(rmax, dy, ny, py), _axis_cells(rmax, dz, nz, pz)
+    nodes = (ma + 1) * (mb + 1) * (mc + 1)
+    return nodes, nodes + 1 + 4 * ma * mb * mc
 
 
 @njit(cache=True)
 def volume_stride(radius, dx, dy, dz, nx, ny, nz, px, py, pz):
-    """Node values kept per particle by ``volume_deposit``: Π over the axes of ``_axis_nodes`` at the largest
-    radius. ``volume_deposit`` takes a ``work`` of at least N × this (more is not used)."""
-    rmax = 0.0
-    for p in range(radius.shape[0]):
-        rmax = max(rmax, radius[p])
-    return _axis_nodes(rmax, dx, nx, px) * _axis_nodes(rmax, dy, ny, py) * _axis_nodes(rmax, dz, nz, pz)
+    """Scratch entries per particle of ``volume_deposit`` (``_volume_layout``): it takes a ``work`` of at least
+    N × this (more is not used)."""
+    return _volume_layout(radius, dx, dy, dz, nx, ny, nz, px, py, pz)[1]
 
 
 @njit(cache=True)
-def _corner_range(lo, hi, position, radius, dx, dy, dz, nx, ny, nz, px, py, pz, stride, corners):
-    """corners[p stride + (mx nb + my) nc + mz] = ``corner_volume`` at node (mx, my, mz) (``_node``) of the
-    na × nb × nc nodes of the cells that sphere p overlaps, for p in [lo, hi); nothing for a sphere inside
-    one cell or one whose nodes do not fit in ``stride`` (``_volume_add`` then takes ``sphere_box_volume``)."""
+def _volume_range(lo, hi, position, radius, scale, dx, dy, dz, nx, ny, nz, px, py, pz, nodes, stride, work):
+    """The per-particle pass of ``volume_deposit`` for p in [lo, hi), into work[p stride:(p + 1) stride]: the
+    ``corner_volume`` of each node (mx, my, mz) (``_node``) of the na × nb × nc nodes of the cells the sphere
+    overlaps at (mx nb + my) nc + mz (0 without a call where the node lies beyond the sphere along an axis,
+    which is what ``corner_volume`` returns there), then at ``nodes`` the number of cells with V_pc > 0 and
+    (i, j, k, scale[p] V_pc) of each, i, j, k wrapped: V_pc the Σ ± of its eight corners in the order and with
+    the signs of ``sphere_box_volume``. A sphere inside one cell has the one cell and its whole volume; one
+    whose nodes do not fit has the count −1 (``_volume_add`` then takes ``sphere_box_volume``)."""
     for p in range(lo, hi):
         r = radius[p]
         x = position[p, 0]
@@ -212,36 +225,83 @@ def _corner_range(lo, hi, position, radius, dx, dy, dz, nx, ny, nz, px, py, pz, 
         a0, a1 = _cell_range(x, r, dx, nx, px)
         b0, b1 = _cell_range(y, r, dy, ny, py)
         c0, c1 = _cell_range(z, r, dz, nz, pz)
-        if a0 == a1 and b0 == b1 and c0 == c1:
+        base = p * stride
+        e = base + nodes
+        if a0 == a1 and b0 == b1 and c0 == c1:  # inside one cell: its whole volume
+            work[e] = 1.0
+            work[e + 1] = a0 % nx
+            work[e + 2] = b0 % ny
+            work[e + 3] = c0 % nz
+            work[e + 4] = scale[p] * 4.0 / 3.0 * math.pi * r * r * r
             continue
         na, nb, nc = a1 - a0 + 2, b1 - b0 + 2, c1 - c0 + 2
-        if na * nb * nc > stride:
+        if na * nb * nc > nodes:
+            work[e] = -1.0
             continue
-        base = p * stride
         for mi in range(na):
             a = _node(a0, mi, dx, nx, px) - x
             for mj in range(nb):
                 b = _node(b0, mj, dy, ny, py) - y
                 for mk in range(nc):
                     c = _node(c0, mk, dz, nz, pz) - z
-                    corners[base + (mi * nb + mj) * nc + mk] = corner_volume(a, b, c, r)
+                    v = 0.0
+                    if a < r and b < r and c < r:
+                        v = corner_volume(a, b, c, r)
+                    work[base + (mi * nb + mj) * nc + mk] = v
+        m = 0
+        for i in range(a0, a1 + 1):
+            for j in range(b0, b1 + 1):
+                for k in range(c0, c1 + 1):
+                    v = 0.0
+                    for s in range(2):
+                        for t in range(2):
+                            row = base + ((i - a0 + s) * nb + j - b0 + t) * nc + k - c0
+                            for u in range(2):
+                                sign = 1.0 if (s + t + u) % 2 == 0 else -1.0
+                                v += sign * work[row + u]
+                    if v > 0.0:
+                        v *= scale[p]
+                        f = e + 1 + 4 * m
+                        work[f] = i % nx
+                        work[f + 1] = j % ny
+                        work[f + 2] = k % nz
+                        work[f + 3] = v
+                        m += 1
+        work[e] = m
 
 
 @njit(cache=True, parallel=True)
-def _corners_parallel(position, radius, dx, dy, dz, nx, ny, nz, px, py, pz, stride, corners):
-    """``_corner_range`` over all particles in chunks of CHUNK on all threads."""
+def _volume_parallel(position, radius, scale, dx, dy, dz, nx, ny, nz, px, py, pz, nodes, stride, work):
+    """``_volume_range`` over all particles in chunks of CHUNK on all threads."""
     n = position.shape[0]
     for c in prange((n + CHUNK - 1) // CHUNK):
-        _corner_range(c * CHUNK, min(n, (c + 1) * CHUNK), position, radius, dx, dy, dz, nx, ny, nz, px, py, pz,
-                      stride, corners)
+        _volume_range(c * CHUNK, min(n, (c + 1) * CHUNK), position, radius, scale, dx, dy, dz, nx, ny, nz, px, py, pz,
+                      nodes, stride, work)
 
 
 @njit(cache=True)
-def _volume_add(position, radius, scale, velocity, dx, dy, dz, px, py, pz, stride, corners, out, ovx, ovy, ovz):
-    """The serial pass of ``volume_deposit``: each cell's V_pc as Σ ± the node values of its eight corners (the
-    order and signs of ``sphere_box_volume``), added in particle order."""
+def _volume_add(position, radius, scale, velocity, dx, dy, dz, px, py, pz, nodes, stride, work, out, ovx, ovy, ovz):
+    """The serial pass of ``volume_deposit``: the cells of ``_volume_range`` added in particle order (a sphere
+    with the count −1 by ``sphere_box_volume`` of each cell, as the deposit was before node values)."""
     nx, ny, nz = out.shape
     for p in range(position.shape[0]):
+        e = p * stride + nodes
+        m = int(work[e])
+        vx = velocity[p, 0]
+        vy = velocity[p, 1]
+        vz = velocity[p, 2]
+        if m >= 0:
+            for q in range(m):
+                f = e + 1 + 4 * q
+                i = int(work[f])
+                j = int(work[f + 1])
+                k = int(work[f + 2])
+                v = work[f + 3]
+                out[i, j, k] += v
+                ovx[i, j, k] += v * vx
+                ovy[i, j, k] += v * vy
+                ovz[i, j, k] += v * vz
+            continue
         r = radius[p]
         x = position[p, 0]
         y = position[p, 1]
@@ -249,40 +309,20 @@ def _volume_add(position, radius, scale, velocity, dx, dy, dz, px, py, pz, strid
         a0, a1 = _cell_range(x, r, dx, nx, px)
         b0, b1 = _cell_range(y, r, dy, ny, py)
         c0, c1 = _cell_range(z, r, dz, nz, pz)
-        if a0 == a1 and b0 == b1 and c0 == c1:  # inside one cell: its whole volume
-            v = scale[p] * 4.0 / 3.0 * math.pi * r * r * r
-            i, j, k = a0 % nx, b0 % ny, c0 % nz
-            out[i, j, k] += v
-            ovx[i, j, k] += v * velocity[p, 0]
-            ovy[i, j, k] += v * velocity[p, 1]
-            ovz[i, j, k] += v * velocity[p, 2]
-            continue
-        nb, nc = b1 - b0 + 2, c1 - c0 + 2
-        direct = (a1 - a0 + 2) * nb * nc > stride
-        base = p * stride
         for i in range(a0, a1 + 1):
             xl, xh = _bounds(i, dx, nx, px)
             for j in range(b0, b1 + 1):
                 yl, yh = _bounds(j, dy, ny, py)
                 for k in range(c0, c1 + 1):
-                    if direct:
-                        zl, zh = _bounds(k, dz, nz, pz)
-                        v = sphere_box_volume(x, y, z, r, xl, xh, yl, yh, zl, zh)
-                    else:
-                        v = 0.0
-                        for s in range(2):
-                            for t in range(2):
-                                row = base + ((i - a0 + s) * nb + j - b0 + t) * nc + k - c0
-                                for u in range(2):
-                                    sign = 1.0 if (s + t + u) % 2 == 0 else -1.0
-                                    v += sign * corners[row + u]
+                    zl, zh = _bounds(k, dz, nz, pz)
+                    v = sphere_box_volume(x, y, z, r, xl, xh, yl, yh, zl, zh)
                     if v > 0.0:
                         v *= scale[p]
                         ii, jj, kk = i % nx, j % ny, k % nz
                         out[ii, jj, kk] += v
-                        ovx[ii, jj, kk] += v * velocity[p, 0]
-                        ovy[ii, jj, kk] += v * velocity[p, 1]
-                        ovz[ii, jj, kk] += v * velocity[p, 2]
+                        ovx[ii, jj, kk] += v * vx
+                        ovy[ii, jj, kk] += v * vy
+                        ovz[ii, jj, kk] += v * vz
 
 
 @njit(cache=True)
@@ -291,21 +331,21 @@ def volume_deposit(position, radius, scale, velocity, dx, dy, dz, px, py, pz, ou
     volume of the sphere in the cell (``sphere_box_volume``, bitwise, from the node values of the module
     docstring; periodic axes wrapped, non-periodic edge cells unbounded). position, velocity : (N, 3);
     radius, scale : (N,); out, ovx, ovy, ovz : (nx, ny, nz), accumulated into. work : (≥ N ``volume_stride``,)
-    float64 scratch for the node values (allocated here if None or shorter)."""
+    float64 scratch (allocated here if None or shorter)."""
     nx, ny, nz = out.shape
     n = position.shape[0]
-    stride = volume_stride(radius, dx, dy, dz, nx, ny, nz, px, py, pz)
+    nodes, stride = _volume_layout(radius, dx, dy, dz, nx, ny, nz, px, py, pz)
     if work is None:
-        corners = np.empty(n * stride)
+        buf = np.empty(n * stride)
     elif work.shape[0] < n * stride:
-        corners = np.empty(n * stride)
+        buf = np.empty(n * stride)
     else:
-        corners = work
+        buf = work
     if n > CHUNK:
-        _corners_parallel(position, radius, dx, dy, dz, nx, ny, nz, px, py, pz, stride, corners)
+        _volume_parallel(position, radius, scale, dx, dy, dz, nx, ny, nz, px, py, pz, nodes, stride, buf)
     else:
-        _corner_range(0, n, position, radius, dx, dy, dz, nx, ny, nz, px, py, pz, stride, corners)
-    _volume_add(position, radius, scale, velocity, dx, dy, dz, px, py, pz, stride, corners, out, ovx, ovy, ovz)
+        _volume_range(0, n, position, radius, scale, dx, dy, dz, nx, ny, nz, px, py, pz, nodes, stride, buf)
+    _volume_add(position, radius, scale, velocity, dx, dy, dz, px, py, pz, nodes, stride, buf, out, ovx, ovy, ovz)
 
 
 @njit(cache=True)

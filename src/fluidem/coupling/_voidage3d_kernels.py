@@ -126,6 +126,50 @@ def corner_volume(a, b, c, r):
     return total
 
 
+@njit(cache=True, inline="always")
+def _bounded_given(a, b, c, ua, ub, uc, r, o3, oa, ob, oc):
+    """``_bounded_volume`` with its octant volumes given: o3 = ``octant_volume``(a, b, c), oa = 2 ``octant_volume``(0,
+    b, c) (a unbounded), ob = 2 ``octant_volume``(0, a, c), oc = 2 ``octant_volume``(0, a, b), for the one bound
+    each axis can have (``_volume_range``)."""
+    k = int(ua) + int(ub) + int(uc)
+    if k == 3:
+        return 4.0 / 3.0 * math.pi * r * r * r
+    if k == 2:
+        h = c if not uc else (b if not ub else a)
+        return math.pi * (r - h) * (r - h) * (2.0 * r + h) / 3.0  # spherical cap beyond h
+    if k == 1:
+        if ua:
+            return oa
+        if ub:
+            return ob
+        return oc
+    return o3
+
+
+@njit(cache=True)
+def _corner_given(a, b, c, r, o3, oa, ob, oc):
+    """``corner_volume`` (the same terms, signs and order) with its octant volumes given (``_bounded_given``): exact
+    where each of a, b, c is either the one bound of its axis or at most −r (unbounded)."""
+    na, sa0, va0, ua0, sa1, va1, ua1 = _terms(a, r)
+    nb, sb0, vb0, ub0, sb1, vb1, ub1 = _terms(b, r)
+    nc, sc0, vc0, uc0, sc1, vc1, uc1 = _terms(c, r)
+    total = 0.0
+    for i in range(na):
+        s_i = sa0 if i == 0 else sa1
+        v_i = va0 if i == 0 else va1
+        u_i = ua0 if i == 0 else ua1
+        for j in range(nb):
+            s_j = sb0 if j == 0 else sb1
+            v_j = vb0 if j == 0 else vb1
+            u_j = ub0 if j == 0 else ub1
+            for k in range(nc):
+                s_k = sc0 if k == 0 else sc1
+                v_k = vc0 if k == 0 else vc1
+                u_k = uc0 if k == 0 else uc1
+                total += s_i * s_j * s_k * _bounded_given(v_i, v_j, v_k, u_i, u_j, u_k, r, o3, oa, ob, oc)
+    return total
+
+
 @njit(cache=True)
 def sphere_box_volume(cx, cy, cz, r, x0, x1, y0, y1, z0, z1):
     """Exact volume [m³] of the sphere of radius r centred at (cx, cy, cz) inside the box
@@ -177,6 +221,12 @@ def _node(a0, m, d, n, periodic):
         return lo
     _, hi = _bounds(a0 + m - 1, d, n, periodic)
     return hi
+
+
+@njit(cache=True, inline="always")
+def _outside(a0, m, x, r, d, n, periodic):
+    """Whether the first of the m nodes from cell a0 lies at or below x − r and the last at or above x + r."""
+    return _node(a0, 0, d, n, periodic) - x <= -r and _node(a0, m - 1, d, n, periodic) - x >= r
 
 
 @njit(cache=True, inline="always")
@@ -238,6 +288,24 @@ def _volume_range(lo, hi, position, radius, scale, dx, dy, dz, nx, ny, nz, px, p
         if na * nb * nc > nodes:
             work[e] = -1.0
             continue
+        # at most two cells per axis (a sphere under a cell across) whose first node lies at or beyond −r and
+        # last at or beyond r (as they do but where round-off puts a node on the sphere): each axis has one
+        # bound, its inner face, and the octant volumes of those bounds are taken once for all the nodes
+        few = (na <= 3 and nb <= 3 and nc <= 3 and _outside(a0, na, x, r, dx, nx, px)
+               and _outside(b0, nb, y, r, dy, ny, py) and _outside(c0, nc, z, r, dz, nz, pz))
+        o3 = oa = ob = oc = 0.0
+        if few:
+            af = _node(a0, 1, dx, nx, px) - x if na == 3 else r
+            bf = _node(b0, 1, dy, ny, py) - y if nb == 3 else r
+            cf = _node(c0, 1, dz, nz, pz) - z if nc == 3 else r
+            if af < r and bf < r and cf < r:
+                o3 = octant_volume(abs(af), abs(bf), abs(cf), r)
+            if bf < r and cf < r:
+                oa = 2.0 * octant_volume(0.0, abs(bf), abs(cf), r)
+            if af < r and cf < r:
+                ob = 2.0 * octant_volume(0.0, abs(af), abs(cf), r)
+            if af < r and bf < r:
+                oc = 2.0 * octant_volume(0.0, abs(af), abs(bf), r)
         for mi in range(na):
             a = _node(a0, mi, dx, nx, px) - x
             for mj in range(nb):
@@ -246,7 +314,7 @@ def _volume_range(lo, hi, position, radius, scale, dx, dy, dz, nx, ny, nz, px, p
                     c = _node(c0, mk, dz, nz, pz) - z
                     v = 0.0
                     if a < r and b < r and c < r:
-                        v = corner_volume(a, b, c, r)
+                        v = _corner_given(a, b, c, r, o3, oa, ob, oc) if few else corner_volume(a, b, c, r)
                     work[base + (mi * nb + mj) * nc + mk] = v
         m = 0
         for i in range(a0, a1 + 1):

@@ -255,8 +255,7 @@ def test_deposit3d_and_forces_equal_the_serial_sums(periodic, fold):
         KC = np.empty(CELLS)
         coef = [np.empty(s) for s in shapes for _ in range(2)]
         E = [np.empty(s) for s in shapes]
-        extra = (np.empty(N, np.bool_), np.empty((N, P3.STENCIL_NODES), np.int64),
-                 np.empty((N, P3.STENCIL_WEIGHTS))) if scratch else ()
+        extra = (np.empty(N, np.bool_),) if scratch else ()
         bad = P3.deposit3d(law, pos, vel, r, vol, u, v, w, eps, rho, mu, inv_dbar, *SPACING, mv, *periodic, fold, kp,
                            *sums, KC, *VF, *coef, True, *E, *extra)
         assert bad == 0

@@ -19,9 +19,10 @@ periodic axes), so Σ_f w_pf = 1 for every particle and face direction.
                            each sub-step's own velocity (``drag_update = "substep"``).
 ``sample3d``               gas velocity (u, v, w) and voidage at points, the same weights (trilinear).
 
-The per-particle work (each K_p with its interpolation weights, each particle's force) runs in chunks of
-``CHUNK`` particles on Numba's threads (``prange``); ``deposit3d`` keeps each particle's weights and nodes in
-scratch arrays and adds them onto the faces in one serial pass in particle order. Every number is computed
+The per-particle work (each K_p with its interpolation and drag law, each particle's force) runs in chunks
+of ``CHUNK`` particles on Numba's threads (``prange``); ``deposit3d`` then adds the K_p onto the faces in one
+serial pass in particle order (recomputing the weights there: on ``bubbling-3d`` that took half the time of
+keeping them in a scratch array and reading them back). Every number is computed
 as on one thread and added in the same order, so the results are bitwise the same for any number of threads.
 """
 import math
@@ -31,9 +32,6 @@ from numba import njit, prange
 
 from ._exchange_kernels import _drag_arguments_valid, store_force
 from ._paired_kernels import CHUNK, _centre_axis, _face_axis
-
-STENCIL_NODES = 21  # per particle: (c0, c1, f0, f1, g0, g1) of each axis, then the centre's cell (i, j, k)
-STENCIL_WEIGHTS = 18  # per particle: (cw0, cw1, fw0, fw1, gw0, gw1) of each axis
 from .drag._dispatch import beta_per_solids
 
 
@@ -142,51 +140,20 @@ def sample3d(position, u, v, w, voidage, dx, dy, dz, px, py, pz, fold, out):
         out[q, 3] = _mean3(voidage, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, ck0, ck1, cwz0, cwz1)
 
 
-@njit(cache=True, inline="always")
-def _store_axis(nodes, weights, q, a, c0, c1, cw0, cw1, f0, f1, fw0, fw1, x, inv_d, n, periodic, pair):
-    """Particle q's nodes and weights along axis a into its row of the stencil scratch (``_kp_range``): the centre
-    and face nodes of ``_axis``, with ``pair`` the folded face nodes of its ∇p (``_face_axis``), and the cell of
-    its centre (the clamped ⌊x / d⌋)."""
-    s = 6 * a
-    nodes[q, s] = c0
-    nodes[q, s + 1] = c1
-    nodes[q, s + 2] = f0
-    nodes[q, s + 3] = f1
-    weights[q, s] = cw0
-    weights[q, s + 1] = cw1
-    weights[q, s + 2] = fw0
-    weights[q, s + 3] = fw1
-    if pair:
-        g0, g1, gw0, gw1 = _face_axis(x, inv_d, n, periodic, True)
-        nodes[q, s + 4] = g0
-        nodes[q, s + 5] = g1
-        weights[q, s + 4] = gw0
-        weights[q, s + 5] = gw1
-    nodes[q, 18 + a] = min(max(int(x * inv_d), 0), n - 1)
-
-
 @njit(cache=True, error_model="numpy")
 def _kp_range(lo, hi, law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, idx, idy, idz,
-              min_voidage, px, py, pz, fold, pair, kp, valid, nodes, weights):
-    """``kp3d`` for the particles [lo, hi); returns the number out of range. With ``nodes`` (N, STENCIL_NODES)
-    and ``weights`` (N, STENCIL_WEIGHTS) non-empty also each particle's interpolation nodes and weights (the
-    ``_axis`` of each axis, with ``pair`` the folded face nodes g of its ∇p, and the cell of its centre)."""
+              min_voidage, px, py, pz, fold, kp, valid):
+    """``kp3d`` for the particles [lo, hi); returns the number out of range."""
     nx, ny, nz = voidage.shape
     mixture = inv_dbar.shape[0] > 0
-    store = nodes.shape[0] > 0
     bad = 0
     for q in range(lo, hi):
         x, y, z = position[q, 0], position[q, 1], position[q, 2]
-        ci0, ci1, cwx0, cwx1, fi0, fi1, fwx0, fwx1 = _axis(x, idx, nx, px, fold)
-        cj0, cj1, cwy0, cwy1, fj0, fj1, fwy0, fwy1 = _axis(y, idy, ny, py, fold)
-        ck0, ck1, cwz0, cwz1, fk0, fk1, fwz0, fwz1 = _axis(z, idz, nz, pz, fold)
-        if store:
-            _store_axis(nodes, weights, q, 0, ci0, ci1, cwx0, cwx1, fi0, fi1, fwx0, fwx1, x, idx, nx, px, pair)
-            _store_axis(nodes, weights, q, 1, cj0, cj1, cwy0, cwy1, fj0, fj1, fwy0, fwy1, y, idy, ny, py, pair)
-            _store_axis(nodes, weights, q, 2, ck0, ck1, cwz0, cwz1, fk0, fk1, fwz0, fwz1, z, idz, nz, pz, pair)
-        ug = _mean3(u, fi0, fi1, fwx0, fwx1, cj0, cj1, cwy0, cwy1, ck0, ck1, cwz0, cwz1)
-        vg = _mean3(v, ci0, ci1, cwx0, cwx1, fj0, fj1, fwy0, fwy1, ck0, ck1, cwz0, cwz1)
-        wg = _mean3(w, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, fk0, fk1, fwz0, fwz1)
+        ug, vg, wg, _, _, _ = _gas_at3(x, y, z, u, v, w, voidage, idx, idy, idz, nx, ny, nz, px, py, pz, fold,
+                                       False)
+        ci0, ci1, cwx0, cwx1 = _centre_axis(x, idx, nx, px)
+        cj0, cj1, cwy0, cwy1 = _centre_axis(y, idy, ny, py)
+        ck0, ck1, cwz0, cwz1 = _centre_axis(z, idz, nz, pz)
         eps = _mean3(voidage, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, ck0, ck1, cwz0, cwz1)
         rg = _mean3(rho, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, ck0, ck1, cwz0, cwz1)
         if eps < min_voidage:
@@ -211,28 +178,14 @@ def _kp_range(lo, hi, law, position, velocity, radius, volume, u, v, w, voidage,
 
 @njit(cache=True, error_model="numpy", parallel=True)
 def _kp_parallel(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, idx, idy, idz,
-                 min_voidage, px, py, pz, fold, pair, kp, valid, nodes, weights):
+                 min_voidage, px, py, pz, fold, kp, valid):
     """``_kp_range`` over all particles in chunks of CHUNK on all threads."""
     n = position.shape[0]
     bad = 0
     for c in prange((n + CHUNK - 1) // CHUNK):
         bad += _kp_range(c * CHUNK, min(n, (c + 1) * CHUNK), law, position, velocity, radius, volume, u, v, w, voidage,
-                         rho, mu, inv_dbar, idx, idy, idz, min_voidage, px, py, pz, fold, pair, kp, valid, nodes,
-                         weights)
+                         rho, mu, inv_dbar, idx, idy, idz, min_voidage, px, py, pz, fold, kp, valid)
     return bad
-
-
-@njit(cache=True, error_model="numpy")
-def _kp_all(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, dx, dy, dz, min_voidage, px,
-            py, pz, fold, pair, kp, valid, nodes, weights):
-    """``_kp_range`` over all particles: in parallel chunks above CHUNK particles."""
-    n = position.shape[0]
-    idx, idy, idz = 1.0 / dx, 1.0 / dy, 1.0 / dz
-    if n > CHUNK:
-        return _kp_parallel(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, idx, idy,
-                            idz, min_voidage, px, py, pz, fold, pair, kp, valid, nodes, weights)
-    return _kp_range(0, n, law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, idx, idy, idz,
-                     min_voidage, px, py, pz, fold, pair, kp, valid, nodes, weights)
 
 
 @njit(cache=True, error_model="numpy")
@@ -241,10 +194,15 @@ def kp3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv
     """kp[q] = β/(1 − ε_q) V_q [kg/s] (Sun 2007 eq. 29) of the law packed in ``law`` at the particle's
     interpolated voidage (clipped to [min_voidage, 1]), gas density and slip |u_q − v_q|; valid[q] whether its
     drag arguments are in range (else kp[q] = NaN). inv_dbar (nx, ny, nz): 1/D̄ of each cell (polydisperse
-    drag, y = d/D̄ with 1/D̄ interpolated as ε is), or (0, 0, 0). Returns the number out of range."""
-    return _kp_all(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, dx, dy, dz,
-                   min_voidage, px, py, pz, fold, False, kp, valid, np.empty((0, STENCIL_NODES), np.int64),
-                   np.empty((0, STENCIL_WEIGHTS)))
+    drag, y = d/D̄ with 1/D̄ interpolated as ε is), or (0, 0, 0). Returns the number out of range. Particles in
+    parallel chunks above CHUNK."""
+    n = position.shape[0]
+    idx, idy, idz = 1.0 / dx, 1.0 / dy, 1.0 / dz
+    if n > CHUNK:
+        return _kp_parallel(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, idx, idy,
+                            idz, min_voidage, px, py, pz, fold, kp, valid)
+    return _kp_range(0, n, law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, idx, idy, idz,
+                     min_voidage, px, py, pz, fold, kp, valid)
 
 
 @njit(cache=True, error_model="numpy")
@@ -272,7 +230,7 @@ def _voidage_of(E, VF, min_voidage):
 @njit(cache=True, error_model="numpy")
 def deposit3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, dx, dy, dz, min_voidage,
               px, py, pz, fold, kp, AU, BU, AV, BV, AW, BW, KC, VU, VV, VW, beta_u, su, beta_v, sv, beta_w, sw, pair,
-              EU, EV, EW, valid=None, nodes=None, weights=None):
+              EU, EV, EW, valid=None):
     """K_p and the face sums of the ``particle`` exchange on a 3D grid (module docstring); returns the number of
     particles whose drag arguments are out of range (K_p NaN, nothing deposited for them).
 
@@ -284,8 +242,10 @@ def deposit3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu
     min_voidage), V_p deposited with the weights of ∇p (boundary faces always folded, as ``_face_gradient3``
     copies the interior face).
 
-    valid (N,) bool, nodes (N, STENCIL_NODES) int64, weights (N, STENCIL_WEIGHTS) float64: scratch of each
-    particle's drag check and interpolation (module docstring), allocated here if None or shorter."""
+    valid : (N,) bool scratch of the drag checks, allocated here if None or shorter. K_p is computed first (in
+    parallel chunks, ``kp3d``), then added to the faces in particle order."""
+    nx, ny, nz = voidage.shape
+    idx, idy, idz = 1.0 / dx, 1.0 / dy, 1.0 / dz
     n = position.shape[0]
     if valid is None:
         ok = np.empty(n, dtype=np.bool_)
@@ -293,20 +253,8 @@ def deposit3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu
         ok = np.empty(n, dtype=np.bool_)
     else:
         ok = valid
-    if nodes is None:
-        si = np.empty((n, STENCIL_NODES), np.int64)
-    elif nodes.shape[0] < n:
-        si = np.empty((n, STENCIL_NODES), np.int64)
-    else:
-        si = nodes
-    if weights is None:
-        sw_ = np.empty((n, STENCIL_WEIGHTS))
-    elif weights.shape[0] < n:
-        sw_ = np.empty((n, STENCIL_WEIGHTS))
-    else:
-        sw_ = weights
-    bad = _kp_all(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, dx, dy, dz, min_voidage,
-                  px, py, pz, fold, pair, kp, ok, si, sw_)
+    bad = kp3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, dx, dy, dz, min_voidage,
+               px, py, pz, fold, kp, ok)
     for arr in (AU, BU, AV, BV, AW, BW, KC):
         arr[:, :, :] = 0.0
     if pair:
@@ -314,13 +262,14 @@ def deposit3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu
         EV[:, :, :] = 0.0
         EW[:, :, :] = 0.0
     for q in range(n):  # the face sums, in particle order
-        ci0, ci1, fi0, fi1, gi0, gi1 = si[q, 0], si[q, 1], si[q, 2], si[q, 3], si[q, 4], si[q, 5]
-        cwx0, cwx1, fwx0, fwx1, gwx0, gwx1 = sw_[q, 0], sw_[q, 1], sw_[q, 2], sw_[q, 3], sw_[q, 4], sw_[q, 5]
-        cj0, cj1, fj0, fj1, gj0, gj1 = si[q, 6], si[q, 7], si[q, 8], si[q, 9], si[q, 10], si[q, 11]
-        cwy0, cwy1, fwy0, fwy1, gwy0, gwy1 = sw_[q, 6], sw_[q, 7], sw_[q, 8], sw_[q, 9], sw_[q, 10], sw_[q, 11]
-        ck0, ck1, fk0, fk1, gk0, gk1 = si[q, 12], si[q, 13], si[q, 14], si[q, 15], si[q, 16], si[q, 17]
-        cwz0, cwz1, fwz0, fwz1, gwz0, gwz1 = sw_[q, 12], sw_[q, 13], sw_[q, 14], sw_[q, 15], sw_[q, 16], sw_[q, 17]
+        x, y, z = position[q, 0], position[q, 1], position[q, 2]
+        ci0, ci1, cwx0, cwx1, fi0, fi1, fwx0, fwx1 = _axis(x, idx, nx, px, fold)
+        cj0, cj1, cwy0, cwy1, fj0, fj1, fwy0, fwy1 = _axis(y, idy, ny, py, fold)
+        ck0, ck1, cwz0, cwz1, fk0, fk1, fwz0, fwz1 = _axis(z, idz, nz, pz, fold)
         if pair:  # V_p on the faces of its ∇p interpolation (always folded)
+            gi0, gi1, gwx0, gwx1 = _face_axis(x, idx, nx, px, True)
+            gj0, gj1, gwy0, gwy1 = _face_axis(y, idy, ny, py, True)
+            gk0, gk1, gwz0, gwz1 = _face_axis(z, idz, nz, pz, True)
             vq = volume[q]
             _add3(EU, gi0, gi1, gwx0, gwx1, cj0, cj1, cwy0, cwy1, ck0, ck1, cwz0, cwz1, vq)
             _add3(EV, ci0, ci1, cwx0, cwx1, gj0, gj1, gwy0, gwy1, ck0, ck1, cwz0, cwz1, vq)
@@ -328,7 +277,10 @@ def deposit3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu
         if not ok[q]:
             continue
         k = kp[q]
-        KC[si[q, 18], si[q, 19], si[q, 20]] += k
+        ic = min(max(int(x * idx), 0), nx - 1)
+        jc = min(max(int(y * idy), 0), ny - 1)
+        kc = min(max(int(z * idz), 0), nz - 1)
+        KC[ic, jc, kc] += k
         _add3(AU, fi0, fi1, fwx0, fwx1, cj0, cj1, cwy0, cwy1, ck0, ck1, cwz0, cwz1, k)
         _add3(BU, fi0, fi1, fwx0, fwx1, cj0, cj1, cwy0, cwy1, ck0, ck1, cwz0, cwz1, k * velocity[q, 0])
         _add3(AV, ci0, ci1, cwx0, cwx1, fj0, fj1, fwy0, fwy1, ck0, ck1, cwz0, cwz1, k)

@@ -91,8 +91,7 @@ class GasCoupling3D(GasCoupling):
         self._kp = np.zeros(st.radius.shape)
         self._kp_cells = np.zeros(gd.shape)
         self._map_work = np.empty(0)  # scratch of the particles → grid map (``_voidage3d_kernels.volume_deposit``)
-        self._deposit_work = (np.empty(0, np.bool_), np.empty((0, P3.STENCIL_NODES), np.int64),
-                              np.empty((0, P3.STENCIL_WEIGHTS)))  # scratch of ``_paired3d_kernels.deposit3d``
+        self._valid = np.empty(st.radius.shape, np.bool_)  # scratch of ``_paired3d_kernels.deposit3d``
         self._cell_inputs = None
         if hasattr(engine, "reorder_listeners"):
             engine.reorder_listeners.append(self._reorder)
@@ -166,16 +165,14 @@ class GasCoupling3D(GasCoupling):
         self._check_gas()
         if self._kp.shape != st.radius.shape:
             self._kp = np.zeros(st.radius.shape)
-        n = st.radius.shape[0]
-        if self._deposit_work[0].shape[0] < n:
-            self._deposit_work = (np.empty(n, np.bool_), np.empty((n, P3.STENCIL_NODES), np.int64),
-                                  np.empty((n, P3.STENCIL_WEIGHTS)))
+        if self._valid.shape[0] < st.radius.shape[0]:
+            self._valid = np.empty(st.radius.shape, np.bool_)
         bad = P3.deposit3d(self._law, st.position, st.velocity, st.radius, self.volume, gs.u, gs.v, gs.w, voidage,
                            gs.rho, self.solver.props.viscosity, self._inv_dbar, gd.dx, gd.dy, gd.dz,
                            self.mapping.minimum_voidage, *self._periodic, self._fold, self._kp, *self._sums,
                            self._kp_cells, *self._face_volumes, self._face_beta[0], self._face_solids[0],
                            self._face_beta[1], self._face_solids[1], self._face_beta[2], self._face_solids[2],
-                           self._pair_pressure, *self._pressure_voidage, *self._deposit_work)
+                           self._pair_pressure, *self._pressure_voidage, self._valid)
         if bad:
             raise ValueError(f"particle drag: arguments out of range for {bad} particles "
                              "(voidage must lie in (0, 1], gas density > 0)")

@@ -183,8 +183,7 @@ def gas_fields(seed=8):
 
 def face_sums_reference(pos, vel, vol, kp, periodic, fold):
     """A_f, B_f of the three face directions, Σ K_p of each cell and Σ_p w_pf V_p (∇p weights), added in particle
-    order with the weights of ``_paired3d_kernels._axis`` (the serial pass of ``deposit3d`` before the weights
-    were kept in a scratch)."""
+    order with the weights of ``_paired3d_kernels._axis``, written out in Python: the serial pass of ``deposit3d``."""
     nx, ny, nz = CELLS
     shapes = [(nx + 1, ny, nz), (nx, ny + 1, nz), (nx, ny, nz + 1)]
     A = [np.zeros(s) for s in shapes]

@@ -20,9 +20,10 @@ untimed run first compiles the kernels or loads their caches. Each component is 
                     and the swap into the engine's external and total forces)
     other           the rest of run(): the step loop, chunking, checks
 
-Printed: milliseconds per gas step of each component, min, median and max over the rounds, and the
-gas solver's factorisations and Newton corrections per gas step. On a shared machine read the
-minimum.
+Printed: milliseconds per gas step of each component, min, median and max over the rounds, the gas
+side's share of the gas step (map, beta, gas solve, deposit and forces over the total, per round), and
+the gas solver's factorisations and Newton corrections per gas step. On a shared machine read the
+minimum; the shares, both parts timed in the same round, drift less than the times.
 """
 from __future__ import annotations
 
@@ -69,6 +70,8 @@ def profile(case, until: float, start: Path | None = None) -> dict:
     row = profile_coupled(sim, sim.time + until)
     steps = max(sim.gas.gas_steps - steps0, 1)
     out = {k: 1e3 * row[k] / steps for k in KEYS}
+    gas_side = sum(out[k] for k in KEYS if k not in ("DEM", "other", "total"))
+    out["gas_side_share"] = 100.0 * gas_side / out["total"] if out["total"] > 0.0 else 0.0
     out.update(value=out["total"], gas_steps=row["gas_steps"],
                factorisations_per_step=(solver.factorisations - f0) / steps,
                corrections_per_step=sum(corrections) / steps, calls=row["calls"])
@@ -97,6 +100,9 @@ def main(argv=None) -> int:
         s = rounds.stats("profile", k)
         rows.append([k, s["min"], s["median"], s["max"]])
     print(harness.format_table(["ms per gas step", "min", "median", "max"], rows))
+    share = rounds.stats("profile", "gas_side_share")
+    print(f"gas side (map, beta, gas solve, deposit, forces): {share['min']:.1f} / {share['median']:.1f} / "
+          f"{share['max']:.1f} % of the gas step (min / median / max)")
     print("calls: " + ", ".join(f"{k} {v}" for k, v in first["calls"].items()))
     print(f"gas solver: {rounds.stats('profile', 'factorisations_per_step')['median']:.3f} factorisations and "
           f"{rounds.stats('profile', 'corrections_per_step')['median']:.2f} Newton corrections per gas step (median)")

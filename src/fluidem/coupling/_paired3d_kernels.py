@@ -18,14 +18,20 @@ periodic axes), so Σ_f w_pf = 1 for every particle and face direction.
 ``particle_forces_split3d`` the same as ext = K_p u_p − V_p ∇p_p and damp = K_p, which the engine evaluates at
                            each sub-step's own velocity (``drag_update = "substep"``).
 ``sample3d``               gas velocity (u, v, w) and voidage at points, the same weights (trilinear).
+
+The per-particle work (each K_p with its interpolation and drag law, each particle's force) runs in chunks
+of ``CHUNK`` particles on Numba's threads (``prange``); ``deposit3d`` then adds the K_p onto the faces in one
+serial pass in particle order (recomputing the weights there: on ``bubbling-3d`` that took half the time of
+keeping them in a scratch array and reading them back). Every number is computed
+as on one thread and added in the same order, so the results are bitwise the same for any number of threads.
 """
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from ._exchange_kernels import _drag_arguments_valid, store_force
-from ._paired_kernels import _centre_axis, _face_axis
+from ._paired_kernels import CHUNK, _centre_axis, _face_axis
 from .drag._dispatch import beta_per_solids
 
 
@@ -135,17 +141,13 @@ def sample3d(position, u, v, w, voidage, dx, dy, dz, px, py, pz, fold, out):
 
 
 @njit(cache=True, error_model="numpy")
-def kp3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, dx, dy, dz, min_voidage, px,
-         py, pz, fold, kp, valid):
-    """kp[q] = β/(1 − ε_q) V_q [kg/s] (Sun 2007 eq. 29) of the law packed in ``law`` at the particle's
-    interpolated voidage (clipped to [min_voidage, 1]), gas density and slip |u_q − v_q|; valid[q] whether its
-    drag arguments are in range (else kp[q] = NaN). inv_dbar (nx, ny, nz): 1/D̄ of each cell (polydisperse
-    drag, y = d/D̄ with 1/D̄ interpolated as ε is), or (0, 0, 0). Returns the number out of range."""
+def _kp_range(lo, hi, law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, idx, idy, idz,
+              min_voidage, px, py, pz, fold, kp, valid):
+    """``kp3d`` for the particles [lo, hi); returns the number out of range."""
     nx, ny, nz = voidage.shape
-    idx, idy, idz = 1.0 / dx, 1.0 / dy, 1.0 / dz
     mixture = inv_dbar.shape[0] > 0
     bad = 0
-    for q in range(position.shape[0]):
+    for q in range(lo, hi):
         x, y, z = position[q, 0], position[q, 1], position[q, 2]
         ug, vg, wg, _, _, _ = _gas_at3(x, y, z, u, v, w, voidage, idx, idy, idz, nx, ny, nz, px, py, pz, fold,
                                        False)
@@ -174,6 +176,35 @@ def kp3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv
     return bad
 
 
+@njit(cache=True, error_model="numpy", parallel=True)
+def _kp_parallel(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, idx, idy, idz,
+                 min_voidage, px, py, pz, fold, kp, valid):
+    """``_kp_range`` over all particles in chunks of CHUNK on all threads."""
+    n = position.shape[0]
+    bad = 0
+    for c in prange((n + CHUNK - 1) // CHUNK):
+        bad += _kp_range(c * CHUNK, min(n, (c + 1) * CHUNK), law, position, velocity, radius, volume, u, v, w, voidage,
+                         rho, mu, inv_dbar, idx, idy, idz, min_voidage, px, py, pz, fold, kp, valid)
+    return bad
+
+
+@njit(cache=True, error_model="numpy")
+def kp3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, dx, dy, dz, min_voidage, px,
+         py, pz, fold, kp, valid):
+    """kp[q] = β/(1 − ε_q) V_q [kg/s] (Sun 2007 eq. 29) of the law packed in ``law`` at the particle's
+    interpolated voidage (clipped to [min_voidage, 1]), gas density and slip |u_q − v_q|; valid[q] whether its
+    drag arguments are in range (else kp[q] = NaN). inv_dbar (nx, ny, nz): 1/D̄ of each cell (polydisperse
+    drag, y = d/D̄ with 1/D̄ interpolated as ε is), or (0, 0, 0). Returns the number out of range. Particles in
+    parallel chunks above CHUNK."""
+    n = position.shape[0]
+    idx, idy, idz = 1.0 / dx, 1.0 / dy, 1.0 / dz
+    if n > CHUNK:
+        return _kp_parallel(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, idx, idy,
+                            idz, min_voidage, px, py, pz, fold, kp, valid)
+    return _kp_range(0, n, law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, idx, idy, idz,
+                     min_voidage, px, py, pz, fold, kp, valid)
+
+
 @njit(cache=True, error_model="numpy")
 def _coefficients(A, B, VF, beta, solids):
     """beta = A / V_f, solids = B / A (0 where A = 0): the face β and u_s the gas takes."""
@@ -199,7 +230,7 @@ def _voidage_of(E, VF, min_voidage):
 @njit(cache=True, error_model="numpy")
 def deposit3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, dx, dy, dz, min_voidage,
               px, py, pz, fold, kp, AU, BU, AV, BV, AW, BW, KC, VU, VV, VW, beta_u, su, beta_v, sv, beta_w, sw, pair,
-              EU, EV, EW):
+              EU, EV, EW, valid=None):
     """K_p and the face sums of the ``particle`` exchange on a 3D grid (module docstring); returns the number of
     particles whose drag arguments are out of range (K_p NaN, nothing deposited for them).
 
@@ -209,13 +240,21 @@ def deposit3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu
     beta_* = A / V_f with the face volumes V* (``exchange3d.face_volumes3d``) and u_s = B / A. ``pair``: EU,
     EV, EW (face shapes) become the pressure term's voidage 1 − Σ_p w_pf V_p / V_f (clipped below at
     min_voidage), V_p deposited with the weights of ∇p (boundary faces always folded, as ``_face_gradient3``
-    copies the interior face)."""
+    copies the interior face).
+
+    valid : (N,) bool scratch of the drag checks, allocated here if None or shorter. K_p is computed first (in
+    parallel chunks, ``kp3d``), then added to the faces in particle order."""
     nx, ny, nz = voidage.shape
     idx, idy, idz = 1.0 / dx, 1.0 / dy, 1.0 / dz
     n = position.shape[0]
-    valid = np.empty(n, dtype=np.bool_)
+    if valid is None:
+        ok = np.empty(n, dtype=np.bool_)
+    elif valid.shape[0] < n:
+        ok = np.empty(n, dtype=np.bool_)
+    else:
+        ok = valid
     bad = kp3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, dx, dy, dz, min_voidage,
-               px, py, pz, fold, kp, valid)
+               px, py, pz, fold, kp, ok)
     for arr in (AU, BU, AV, BV, AW, BW, KC):
         arr[:, :, :] = 0.0
     if pair:
@@ -235,7 +274,7 @@ def deposit3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu
             _add3(EU, gi0, gi1, gwx0, gwx1, cj0, cj1, cwy0, cwy1, ck0, ck1, cwz0, cwz1, vq)
             _add3(EV, ci0, ci1, cwx0, cwx1, gj0, gj1, gwy0, gwy1, ck0, ck1, cwz0, cwz1, vq)
             _add3(EW, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, gk0, gk1, gwz0, gwz1, vq)
-        if not valid[q]:
+        if not ok[q]:
             continue
         k = kp[q]
         ic = min(max(int(x * idx), 0), nx - 1)
@@ -259,14 +298,12 @@ def deposit3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu
 
 
 @njit(cache=True, error_model="numpy")
-def particle_forces3d(position, velocity, volume, kp, u, v, w, p, dx, dy, dz, px, py, pz, fold, pressure_force, out,
-                      total):
-    """out[q] = K_q (u_q − v_q) − V_q ∇p_q [N] (Sun 2007 eqs 28-29) with the weights of ``deposit3d``; ``total``
-    (N, 3) follows the change of ``out`` (``_exchange_kernels.store_force``) or is (0, 3)."""
+def _forces_range(lo, hi, position, velocity, volume, kp, u, v, w, p, idx, idy, idz, px, py, pz, fold, pressure_force,
+                  out, total):
+    """``particle_forces3d`` for the particles [lo, hi)."""
     nx, ny, nz = p.shape
-    idx, idy, idz = 1.0 / dx, 1.0 / dy, 1.0 / dz
     follow = total.shape[0] > 0
-    for q in range(position.shape[0]):
+    for q in range(lo, hi):
         ug, vg, wg, gx, gy, gz = _gas_at3(position[q, 0], position[q, 1], position[q, 2], u, v, w, p, idx, idy, idz,
                                           nx, ny, nz, px, py, pz, fold, pressure_force)
         k = kp[q]
@@ -280,16 +317,38 @@ def particle_forces3d(position, velocity, volume, kp, u, v, w, p, dx, dy, dz, px
         store_force(out, total, q, fx, fy, fz, follow)
 
 
+@njit(cache=True, error_model="numpy", parallel=True)
+def _forces_parallel(position, velocity, volume, kp, u, v, w, p, idx, idy, idz, px, py, pz, fold, pressure_force, out,
+                     total):
+    """``_forces_range`` over all particles in chunks of CHUNK on all threads."""
+    n = position.shape[0]
+    for c in prange((n + CHUNK - 1) // CHUNK):
+        _forces_range(c * CHUNK, min(n, (c + 1) * CHUNK), position, velocity, volume, kp, u, v, w, p, idx, idy, idz,
+                      px, py, pz, fold, pressure_force, out, total)
+
+
 @njit(cache=True, error_model="numpy")
-def particle_forces_split3d(position, velocity, volume, kp, u, v, w, p, dx, dy, dz, px, py, pz, fold, pressure_force,
-                            ext, damp, total):
-    """``particle_forces3d`` split for a drag that follows the particle's own velocity (``drag_update =
-    "substep"``): ext[q] = K_q u_q − V_q ∇p_q and damp[q] = K_q, the engine evaluating ext − K v at each
-    sub-step's velocity (Sun 2007 eq. 29 with u_q held from the step). ``total`` (N, 3) follows the change of
-    the force at the current velocity: += (ext_new − K_new v) − (ext_old − K_old v)."""
-    nx, ny, nz = p.shape
+def particle_forces3d(position, velocity, volume, kp, u, v, w, p, dx, dy, dz, px, py, pz, fold, pressure_force, out,
+                      total):
+    """out[q] = K_q (u_q − v_q) − V_q ∇p_q [N] (Sun 2007 eqs 28-29) with the weights of ``deposit3d``; ``total``
+    (N, 3) follows the change of ``out`` (``_exchange_kernels.store_force``) or is (0, 3). Particles in parallel
+    chunks above CHUNK."""
+    n = position.shape[0]
     idx, idy, idz = 1.0 / dx, 1.0 / dy, 1.0 / dz
-    for q in range(position.shape[0]):
+    if n > CHUNK:
+        _forces_parallel(position, velocity, volume, kp, u, v, w, p, idx, idy, idz, px, py, pz, fold, pressure_force,
+                         out, total)
+    else:
+        _forces_range(0, n, position, velocity, volume, kp, u, v, w, p, idx, idy, idz, px, py, pz, fold,
+                      pressure_force, out, total)
+
+
+@njit(cache=True, error_model="numpy")
+def _split_range(lo, hi, position, velocity, volume, kp, u, v, w, p, idx, idy, idz, px, py, pz, fold, pressure_force,
+                 ext, damp, total):
+    """``particle_forces_split3d`` for the particles [lo, hi)."""
+    nx, ny, nz = p.shape
+    for q in range(lo, hi):
         ug, vg, wg, gx, gy, gz = _gas_at3(position[q, 0], position[q, 1], position[q, 2], u, v, w, p, idx, idy, idz,
                                           nx, ny, nz, px, py, pz, fold, pressure_force)
         k = kp[q]
@@ -307,3 +366,31 @@ def particle_forces_split3d(position, velocity, volume, kp, u, v, w, p, dx, dy, 
             total[q, m] += (new - k * vm) - (ext[q, m] - c * vm)
             ext[q, m] = new
         damp[q] = k
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def _split_parallel(position, velocity, volume, kp, u, v, w, p, idx, idy, idz, px, py, pz, fold, pressure_force, ext,
+                    damp, total):
+    """``_split_range`` over all particles in chunks of CHUNK on all threads."""
+    n = position.shape[0]
+    for c in prange((n + CHUNK - 1) // CHUNK):
+        _split_range(c * CHUNK, min(n, (c + 1) * CHUNK), position, velocity, volume, kp, u, v, w, p, idx, idy, idz,
+                     px, py, pz, fold, pressure_force, ext, damp, total)
+
+
+@njit(cache=True, error_model="numpy")
+def particle_forces_split3d(position, velocity, volume, kp, u, v, w, p, dx, dy, dz, px, py, pz, fold, pressure_force,
+                            ext, damp, total):
+    """``particle_forces3d`` split for a drag that follows the particle's own velocity (``drag_update =
+    "substep"``): ext[q] = K_q u_q − V_q ∇p_q and damp[q] = K_q, the engine evaluating ext − K v at each
+    sub-step's velocity (Sun 2007 eq. 29 with u_q held from the step). ``total`` (N, 3) follows the change of
+    the force at the current velocity: += (ext_new − K_new v) − (ext_old − K_old v). Particles in parallel
+    chunks above CHUNK."""
+    n = position.shape[0]
+    idx, idy, idz = 1.0 / dx, 1.0 / dy, 1.0 / dz
+    if n > CHUNK:
+        _split_parallel(position, velocity, volume, kp, u, v, w, p, idx, idy, idz, px, py, pz, fold, pressure_force,
+                        ext, damp, total)
+    else:
+        _split_range(0, n, position, velocity, volume, kp, u, v, w, p, idx, idy, idz, px, py, pz, fold,
+                     pressure_force, ext, damp, total)

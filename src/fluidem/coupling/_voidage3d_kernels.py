@@ -20,13 +20,24 @@ a cell edge, which a Gauss rule resolves only slowly; the closed form is exact t
 few transcendental calls per cell corner. Octants with a negative bound are reduced to non-negative ones
 by the sphere's mirror symmetry (1_{x > a} = 1 − 1_{−x > −a}); an unbounded axis leaves a spherical cap
 (two unbounded) or twice the octant at a = 0 (one unbounded).
+
+``volume_deposit`` evaluates ``corner_volume`` once per grid node around a sphere and sums each cell's
+eight corners from those values, in the order and with the signs of ``sphere_box_volume``, so each cell's
+volume is bitwise the one ``sphere_box_volume`` gives while a node shared by several cells is evaluated
+once (a sphere across three cell faces: 27 nodes instead of 8 × 8 corners). The per-particle work (the
+node values and each cell's volume; for the centroid map each particle's cell) is done first, in chunks of
+``CHUNK`` particles on Numba's threads (``prange``), into a scratch array ``work``; the sums onto the grid
+follow in one serial pass in particle order. Every number is computed as on one thread and added in the same
+order, so the maps are bitwise the same for any number of threads.
 """
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from ._voidage_kernels import cell_index
+
+CHUNK = 256  # particles per work item of the parallel passes
 
 
 @njit(cache=True, inline="always")
@@ -115,6 +126,50 @@ def corner_volume(a, b, c, r):
     return total
 
 
+@njit(cache=True, inline="always")
+def _bounded_given(a, b, c, ua, ub, uc, r, o3, oa, ob, oc):
+    """``_bounded_volume`` with its octant volumes given: o3 = ``octant_volume``(a, b, c), oa = 2 ``octant_volume``(0,
+    b, c) (a unbounded), ob = 2 ``octant_volume``(0, a, c), oc = 2 ``octant_volume``(0, a, b), for the one bound
+    each axis can have (``_volume_range``)."""
+    k = int(ua) + int(ub) + int(uc)
+    if k == 3:
+        return 4.0 / 3.0 * math.pi * r * r * r
+    if k == 2:
+        h = c if not uc else (b if not ub else a)
+        return math.pi * (r - h) * (r - h) * (2.0 * r + h) / 3.0  # spherical cap beyond h
+    if k == 1:
+        if ua:
+            return oa
+        if ub:
+            return ob
+        return oc
+    return o3
+
+
+@njit(cache=True)
+def _corner_given(a, b, c, r, o3, oa, ob, oc):
+    """``corner_volume`` (the same terms, signs and order) with its octant volumes given (``_bounded_given``): exact
+    where each of a, b, c is either the one bound of its axis or at most −r (unbounded)."""
+    na, sa0, va0, ua0, sa1, va1, ua1 = _terms(a, r)
+    nb, sb0, vb0, ub0, sb1, vb1, ub1 = _terms(b, r)
+    nc, sc0, vc0, uc0, sc1, vc1, uc1 = _terms(c, r)
+    total = 0.0
+    for i in range(na):
+        s_i = sa0 if i == 0 else sa1
+        v_i = va0 if i == 0 else va1
+        u_i = ua0 if i == 0 else ua1
+        for j in range(nb):
+            s_j = sb0 if j == 0 else sb1
+            v_j = vb0 if j == 0 else vb1
+            u_j = ub0 if j == 0 else ub1
+            for k in range(nc):
+                s_k = sc0 if k == 0 else sc1
+                v_k = vc0 if k == 0 else vc1
+                u_k = uc0 if k == 0 else uc1
+                total += s_i * s_j * s_k * _bounded_given(v_i, v_j, v_k, u_i, u_j, u_k, r, o3, oa, ob, oc)
+    return total
+
+
 @njit(cache=True)
 def sphere_box_volume(cx, cy, cz, r, x0, x1, y0, y1, z0, z1):
     """Exact volume [m³] of the sphere of radius r centred at (cx, cy, cz) inside the box
@@ -157,14 +212,62 @@ def _bounds(i, d, n, periodic):
     return lo, hi
 
 
+@njit(cache=True, inline="always")
+def _node(a0, m, d, n, periodic):
+    """Coordinate of node m of the cells a0, a0 + 1, … of one axis: the lower side of cell a0 (m = 0) or the upper
+    side of cell a0 + m − 1, as ``_bounds`` gives them."""
+    if m == 0:
+        lo, _ = _bounds(a0, d, n, periodic)
+        return lo
+    _, hi = _bounds(a0 + m - 1, d, n, periodic)
+    return hi
+
+
+@njit(cache=True, inline="always")
+def _outside(a0, m, x, r, d, n, periodic):
+    """Whether the first of the m nodes from cell a0 lies at or below x − r and the last at or above x + r."""
+    return _node(a0, 0, d, n, periodic) - x <= -r and _node(a0, m - 1, d, n, periodic) - x >= r
+
+
+@njit(cache=True, inline="always")
+def _axis_cells(r, d, n, periodic):
+    """Most cells along one axis that [x − r, x + r] can touch: ⌊2r/d⌋ + 2 (the margin covering round-off), at
+    most n on a non-periodic axis."""
+    m = int(math.floor(2.0 * r / d + 1e-6)) + 2
+    if not periodic:
+        m = min(m, n)
+    return m
+
+
 @njit(cache=True)
-def volume_deposit(position, radius, scale, velocity, dx, dy, dz, px, py, pz, out, ovx, ovy, ovz):
-    """Add scale[p] V_pc (and scale[p] V_pc v[p]) to every cell c that the sphere of p overlaps, V_pc the exact
-    volume of the sphere in the cell (``sphere_box_volume``; periodic axes wrapped, non-periodic edge cells
-    unbounded). position, velocity : (N, 3); radius, scale : (N,); out, ovx, ovy, ovz : (nx, ny, nz),
-    accumulated into."""
-    nx, ny, nz = out.shape
-    for p in range(position.shape[0]):
+def _volume_layout(radius, dx, dy, dz, nx, ny, nz, px, py, pz):
+    """(nodes, stride) of the scratch of ``volume_deposit`` per particle: room for the node values of the most
+    cells a sphere of the largest radius can overlap, then a count and (i, j, k, V) of each of those cells."""
+    rmax = 0.0
+    for p in range(radius.shape[0]):
+        rmax = max(rmax, radius[p])
+    ma, mb, mc = _axis_cells(rmax, dx, nx, px), _axis_cells(rmax, dy, ny, py), _axis_cells(rmax, dz, nz, pz)
+    nodes = (ma + 1) * (mb + 1) * (mc + 1)
+    return nodes, nodes + 1 + 4 * ma * mb * mc
+
+
+@njit(cache=True)
+def volume_stride(radius, dx, dy, dz, nx, ny, nz, px, py, pz):
+    """Scratch entries per particle of ``volume_deposit`` (``_volume_layout``): it takes a ``work`` of at least
+    N × this (more is not used)."""
+    return _volume_layout(radius, dx, dy, dz, nx, ny, nz, px, py, pz)[1]
+
+
+@njit(cache=True)
+def _volume_range(lo, hi, position, radius, scale, dx, dy, dz, nx, ny, nz, px, py, pz, nodes, stride, work):
+    """The per-particle pass of ``volume_deposit`` for p in [lo, hi), into work[p stride:(p + 1) stride]: the
+    ``corner_volume`` of each node (mx, my, mz) (``_node``) of the na × nb × nc nodes of the cells the sphere
+    overlaps at (mx nb + my) nc + mz (0 without a call where the node lies beyond the sphere along an axis,
+    which is what ``corner_volume`` returns there), then at ``nodes`` the number of cells with V_pc > 0 and
+    (i, j, k, scale[p] V_pc) of each, i, j, k wrapped: V_pc the Σ ± of its eight corners in the order and with
+    the signs of ``sphere_box_volume``. A sphere inside one cell has the one cell and its whole volume; one
+    whose nodes do not fit has the count −1 (``_volume_add`` then takes ``sphere_box_volume``)."""
+    for p in range(lo, hi):
         r = radius[p]
         x = position[p, 0]
         y = position[p, 1]
@@ -172,14 +275,108 @@ def volume_deposit(position, radius, scale, velocity, dx, dy, dz, px, py, pz, ou
         a0, a1 = _cell_range(x, r, dx, nx, px)
         b0, b1 = _cell_range(y, r, dy, ny, py)
         c0, c1 = _cell_range(z, r, dz, nz, pz)
+        base = p * stride
+        e = base + nodes
         if a0 == a1 and b0 == b1 and c0 == c1:  # inside one cell: its whole volume
-            v = scale[p] * 4.0 / 3.0 * math.pi * r * r * r
-            i, j, k = a0 % nx, b0 % ny, c0 % nz
-            out[i, j, k] += v
-            ovx[i, j, k] += v * velocity[p, 0]
-            ovy[i, j, k] += v * velocity[p, 1]
-            ovz[i, j, k] += v * velocity[p, 2]
+            work[e] = 1.0
+            work[e + 1] = a0 % nx
+            work[e + 2] = b0 % ny
+            work[e + 3] = c0 % nz
+            work[e + 4] = scale[p] * 4.0 / 3.0 * math.pi * r * r * r
             continue
+        na, nb, nc = a1 - a0 + 2, b1 - b0 + 2, c1 - c0 + 2
+        if na * nb * nc > nodes:
+            work[e] = -1.0
+            continue
+        # at most two cells per axis (a sphere under a cell across) whose first node lies at or beyond −r and
+        # last at or beyond r (as they do but where round-off puts a node on the sphere): each axis has one
+        # bound, its inner face, and the octant volumes of those bounds are taken once for all the nodes
+        few = (na <= 3 and nb <= 3 and nc <= 3 and _outside(a0, na, x, r, dx, nx, px)
+               and _outside(b0, nb, y, r, dy, ny, py) and _outside(c0, nc, z, r, dz, nz, pz))
+        o3 = oa = ob = oc = 0.0
+        if few:
+            af = _node(a0, 1, dx, nx, px) - x if na == 3 else r
+            bf = _node(b0, 1, dy, ny, py) - y if nb == 3 else r
+            cf = _node(c0, 1, dz, nz, pz) - z if nc == 3 else r
+            if af < r and bf < r and cf < r:
+                o3 = octant_volume(abs(af), abs(bf), abs(cf), r)
+            if bf < r and cf < r:
+                oa = 2.0 * octant_volume(0.0, abs(bf), abs(cf), r)
+            if af < r and cf < r:
+                ob = 2.0 * octant_volume(0.0, abs(af), abs(cf), r)
+            if af < r and bf < r:
+                oc = 2.0 * octant_volume(0.0, abs(af), abs(bf), r)
+        for mi in range(na):
+            a = _node(a0, mi, dx, nx, px) - x
+            for mj in range(nb):
+                b = _node(b0, mj, dy, ny, py) - y
+                for mk in range(nc):
+                    c = _node(c0, mk, dz, nz, pz) - z
+                    v = 0.0
+                    if a < r and b < r and c < r:
+                        v = _corner_given(a, b, c, r, o3, oa, ob, oc) if few else corner_volume(a, b, c, r)
+                    work[base + (mi * nb + mj) * nc + mk] = v
+        m = 0
+        for i in range(a0, a1 + 1):
+            for j in range(b0, b1 + 1):
+                for k in range(c0, c1 + 1):
+                    v = 0.0
+                    for s in range(2):
+                        for t in range(2):
+                            row = base + ((i - a0 + s) * nb + j - b0 + t) * nc + k - c0
+                            for u in range(2):
+                                sign = 1.0 if (s + t + u) % 2 == 0 else -1.0
+                                v += sign * work[row + u]
+                    if v > 0.0:
+                        v *= scale[p]
+                        f = e + 1 + 4 * m
+                        work[f] = i % nx
+                        work[f + 1] = j % ny
+                        work[f + 2] = k % nz
+                        work[f + 3] = v
+                        m += 1
+        work[e] = m
+
+
+@njit(cache=True, parallel=True)
+def _volume_parallel(position, radius, scale, dx, dy, dz, nx, ny, nz, px, py, pz, nodes, stride, work):
+    """``_volume_range`` over all particles in chunks of CHUNK on all threads."""
+    n = position.shape[0]
+    for c in prange((n + CHUNK - 1) // CHUNK):
+        _volume_range(c * CHUNK, min(n, (c + 1) * CHUNK), position, radius, scale, dx, dy, dz, nx, ny, nz, px, py, pz,
+                      nodes, stride, work)
+
+
+@njit(cache=True)
+def _volume_add(position, radius, scale, velocity, dx, dy, dz, px, py, pz, nodes, stride, work, out, ovx, ovy, ovz):
+    """The serial pass of ``volume_deposit``: the cells of ``_volume_range`` added in particle order (a sphere
+    with the count −1 by ``sphere_box_volume`` of each cell, as the deposit was before node values)."""
+    nx, ny, nz = out.shape
+    for p in range(position.shape[0]):
+        e = p * stride + nodes
+        m = int(work[e])
+        vx = velocity[p, 0]
+        vy = velocity[p, 1]
+        vz = velocity[p, 2]
+        if m >= 0:
+            for q in range(m):
+                f = e + 1 + 4 * q
+                i = int(work[f])
+                j = int(work[f + 1])
+                k = int(work[f + 2])
+                v = work[f + 3]
+                out[i, j, k] += v
+                ovx[i, j, k] += v * vx
+                ovy[i, j, k] += v * vy
+                ovz[i, j, k] += v * vz
+            continue
+        r = radius[p]
+        x = position[p, 0]
+        y = position[p, 1]
+        z = position[p, 2]
+        a0, a1 = _cell_range(x, r, dx, nx, px)
+        b0, b1 = _cell_range(y, r, dy, ny, py)
+        c0, c1 = _cell_range(z, r, dz, nz, pz)
         for i in range(a0, a1 + 1):
             xl, xh = _bounds(i, dx, nx, px)
             for j in range(b0, b1 + 1):
@@ -191,20 +388,76 @@ def volume_deposit(position, radius, scale, velocity, dx, dy, dz, px, py, pz, ou
                         v *= scale[p]
                         ii, jj, kk = i % nx, j % ny, k % nz
                         out[ii, jj, kk] += v
-                        ovx[ii, jj, kk] += v * velocity[p, 0]
-                        ovy[ii, jj, kk] += v * velocity[p, 1]
-                        ovz[ii, jj, kk] += v * velocity[p, 2]
+                        ovx[ii, jj, kk] += v * vx
+                        ovy[ii, jj, kk] += v * vy
+                        ovz[ii, jj, kk] += v * vz
 
 
 @njit(cache=True)
-def centroid_deposit3d(position, weight, velocity, dx, dy, dz, out, ovx, ovy, ovz):
-    """Add weight[p] (and weight[p] v[p]) to the cell holding the centre of particle p (Sun 2007 eq. 34 in 3D);
-    centres outside count in the nearest edge cell. out, ovx, ovy, ovz : (nx, ny, nz), accumulated into."""
+def volume_deposit(position, radius, scale, velocity, dx, dy, dz, px, py, pz, out, ovx, ovy, ovz, work=None):
+    """Add scale[p] V_pc (and scale[p] V_pc v[p]) to every cell c that the sphere of p overlaps, V_pc the exact
+    volume of the sphere in the cell (``sphere_box_volume``, bitwise, from the node values of the module
+    docstring; periodic axes wrapped, non-periodic edge cells unbounded). position, velocity : (N, 3);
+    radius, scale : (N,); out, ovx, ovy, ovz : (nx, ny, nz), accumulated into. work : (≥ N ``volume_stride``,)
+    float64 scratch (allocated here if None or shorter)."""
     nx, ny, nz = out.shape
-    for p in range(position.shape[0]):
+    n = position.shape[0]
+    nodes, stride = _volume_layout(radius, dx, dy, dz, nx, ny, nz, px, py, pz)
+    if work is None:
+        buf = np.empty(n * stride)
+    elif work.shape[0] < n * stride:
+        buf = np.empty(n * stride)
+    else:
+        buf = work
+    if n > CHUNK:
+        _volume_parallel(position, radius, scale, dx, dy, dz, nx, ny, nz, px, py, pz, nodes, stride, buf)
+    else:
+        _volume_range(0, n, position, radius, scale, dx, dy, dz, nx, ny, nz, px, py, pz, nodes, stride, buf)
+    _volume_add(position, radius, scale, velocity, dx, dy, dz, px, py, pz, nodes, stride, buf, out, ovx, ovy, ovz)
+
+
+@njit(cache=True)
+def _centroid_range(lo, hi, position, dx, dy, dz, nx, ny, nz, cells):
+    """cells[p] = (i ny + j) nz + k, the cell holding the centre of p (``cell_index``), for p in [lo, hi); stored
+    as float64, exact below 2^53."""
+    for p in range(lo, hi):
         i = cell_index(position[p, 0], 1.0 / dx, nx)
         j = cell_index(position[p, 1], 1.0 / dy, ny)
         k = cell_index(position[p, 2], 1.0 / dz, nz)
+        cells[p] = (i * ny + j) * nz + k
+
+
+@njit(cache=True, parallel=True)
+def _centroid_parallel(position, dx, dy, dz, nx, ny, nz, cells):
+    """``_centroid_range`` over all particles in chunks of CHUNK on all threads."""
+    n = position.shape[0]
+    for c in prange((n + CHUNK - 1) // CHUNK):
+        _centroid_range(c * CHUNK, min(n, (c + 1) * CHUNK), position, dx, dy, dz, nx, ny, nz, cells)
+
+
+@njit(cache=True)
+def centroid_deposit3d(position, weight, velocity, dx, dy, dz, out, ovx, ovy, ovz, work=None):
+    """Add weight[p] (and weight[p] v[p]) to the cell holding the centre of particle p (Sun 2007 eq. 34 in 3D);
+    centres outside count in the nearest edge cell. out, ovx, ovy, ovz : (nx, ny, nz), accumulated into.
+    work : (≥ N,) float64 scratch for the cells of the centres (allocated here if None or shorter)."""
+    nx, ny, nz = out.shape
+    n = position.shape[0]
+    if work is None:
+        cells = np.empty(n)
+    elif work.shape[0] < n:
+        cells = np.empty(n)
+    else:
+        cells = work
+    if n > CHUNK:
+        _centroid_parallel(position, dx, dy, dz, nx, ny, nz, cells)
+    else:
+        _centroid_range(0, n, position, dx, dy, dz, nx, ny, nz, cells)
+    nyz = ny * nz
+    for p in range(n):
+        c = int(cells[p])
+        i = c // nyz
+        j = (c - i * nyz) // nz
+        k = c - i * nyz - j * nz
         w = weight[p]
         out[i, j, k] += w
         ovx[i, j, k] += w * velocity[p, 0]
@@ -244,14 +497,15 @@ def diffuse3d(field, rx, ry, rz, px, py, pz, steps, work):
 
 @njit(cache=True)
 def deposit_solids3d(method, weighting, position, radius, volume, velocity, dx, dy, dz, px, py, pz, norm, frac,
-                     wsum, wvx, wvy, wvz):
+                     wsum, wvx, wvy, wvz, work=None):
     """Solids fraction ``frac`` (unsmoothed) and the velocity weights ``wsum``, ``wv*`` of each cell of a 3D grid.
 
     method 0 (centroid): V_p into the cell of the centre (Sun 2007 eq. 34); 3 (volume): the exact volume of
     the sphere in every cell it overlaps (``volume_deposit``). ``frac`` is the deposit over ``norm`` (V_cell).
     weighting 0 (number): wsum counts centres, wv* sum their velocities (Hoomans 1996 eq. 50); 1 (volume):
     wsum is the deposit and wv* the deposit-weighted velocities (Sun 2007 eq. 35).
-    position, velocity : (N, 3); radius, volume : (N,); the rest (nx, ny, nz), overwritten.
+    position, velocity : (N, 3); radius, volume : (N,); the rest (nx, ny, nz), overwritten. work : float64
+    scratch of the deposits (``volume_deposit``, ``centroid_deposit3d``), or None.
     """
     frac[:, :, :] = 0.0
     wvx[:, :, :] = 0.0
@@ -259,9 +513,9 @@ def deposit_solids3d(method, weighting, position, radius, volume, velocity, dx, 
     wvz[:, :, :] = 0.0
     n = position.shape[0]
     if method == 0:
-        centroid_deposit3d(position, volume, velocity, dx, dy, dz, frac, wvx, wvy, wvz)  # Sun 2007 eq. 34
+        centroid_deposit3d(position, volume, velocity, dx, dy, dz, frac, wvx, wvy, wvz, work)  # Sun 2007 eq. 34
     else:
-        volume_deposit(position, radius, np.ones(n), velocity, dx, dy, dz, px, py, pz, frac, wvx, wvy, wvz)
+        volume_deposit(position, radius, np.ones(n), velocity, dx, dy, dz, px, py, pz, frac, wvx, wvy, wvz, work)
     wsum[:, :, :] = frac
     frac[:, :, :] /= norm
     if weighting == 0:  # Hoomans 1996 eq. 50: by centres, each particle counts once
@@ -269,17 +523,18 @@ def deposit_solids3d(method, weighting, position, radius, volume, velocity, dx, 
         wvx[:, :, :] = 0.0
         wvy[:, :, :] = 0.0
         wvz[:, :, :] = 0.0
-        centroid_deposit3d(position, np.ones(n), velocity, dx, dy, dz, wsum, wvx, wvy, wvz)
+        centroid_deposit3d(position, np.ones(n), velocity, dx, dy, dz, wsum, wvx, wvy, wvz, work)
 
 
 @njit(cache=True)
 def map_solids3d(method, weighting, position, radius, volume, velocity, dx, dy, dz, px, py, pz, norm, rx, ry, rz,
-                 steps, min_voidage, voidage, solids_u, solids_v, solids_w):
+                 steps, min_voidage, voidage, solids_u, solids_v, solids_w, work=None):
     """The particle → grid map of ``VoidageMapping.map`` on a 3D grid; returns the number of clipped cells.
 
     ``deposit_solids3d``; then ``steps`` diffusion steps of the fraction (``diffuse3d``; 0: none);
     ε = 1 − fraction, raised to min_voidage where below it (and counted); solids velocity wv/wsum, 0 where
-    wsum = 0. voidage, solids_u, solids_v, solids_w : (nx, ny, nz) outputs.
+    wsum = 0. voidage, solids_u, solids_v, solids_w : (nx, ny, nz) outputs. work : float64 scratch of the
+    deposit, of at least N ``volume_stride`` (volume) or N (centroid) entries, or None (allocated here).
     """
     shape = voidage.shape
     frac = np.empty(shape)
@@ -288,7 +543,7 @@ def map_solids3d(method, weighting, position, radius, volume, velocity, dx, dy, 
     wvy = np.empty(shape)
     wvz = np.empty(shape)
     deposit_solids3d(method, weighting, position, radius, volume, velocity, dx, dy, dz, px, py, pz, norm, frac,
-                     wsum, wvx, wvy, wvz)
+                     wsum, wvx, wvy, wvz, work)
     if steps > 0:
         diffuse3d(frac, rx, ry, rz, px, py, pz, steps, np.empty(shape))
     nx, ny, nz = shape

@@ -98,6 +98,8 @@ class GasCoupling3D(GasCoupling):
         self._face_volumes = face_volumes3d(gd.shape, self._periodic, gd.cell_volume)
         self._kp = np.zeros(st.radius.shape)
         self._kp_cells = np.zeros(gd.shape)
+        self._map_work = np.empty(0)  # scratch of the particles → grid map (``_voidage3d_kernels.volume_deposit``)
+        self._valid = np.empty(st.radius.shape, np.bool_)  # scratch of ``_paired3d_kernels.deposit3d``
         self._cell_inputs = None
         if hasattr(engine, "reorder_listeners"):
             engine.reorder_listeners.append(self._reorder)
@@ -123,7 +125,11 @@ class GasCoupling3D(GasCoupling):
         st, gd = self._particles(), self.grid
         if self._inv_dbar.shape[0] > 0:
             VK3.sauter_inverse3d(st.position, st.radius, self.volume, gd.dx, gd.dy, gd.dz, self._inv_dbar)
-        return self.mapping.map_particles(gd, st.position, st.radius, self.volume, st.velocity, self._periodic)
+        need = st.radius.shape[0] * VK3.volume_stride(st.radius, gd.dx, gd.dy, gd.dz, *gd.shape, *self._periodic)
+        if self._map_work.shape[0] < need:
+            self._map_work = np.empty(need)
+        return self.mapping.map_particles(gd, st.position, st.radius, self.volume, st.velocity, self._periodic,
+                                          self._map_work)
 
     def cell_beta(self, voidage, solids_u, solids_v, solids_w=None):
         """β per cell [kg m^-3 s^-1], (nx, ny, nz): Σ_p β/(1 − ε)(ε, |u_c − v_s|, d_p) V_p / V_cell (Sun 2007 eq. 33,
@@ -209,12 +215,14 @@ class GasCoupling3D(GasCoupling):
         self._check_gas()
         if self._kp.shape != st.radius.shape:
             self._kp = np.zeros(st.radius.shape)
+        if self._valid.shape[0] < st.radius.shape[0]:
+            self._valid = np.empty(st.radius.shape, np.bool_)
         bad = P3.deposit3d(self._law, st.position, st.velocity, st.radius, self.volume, gs.u, gs.v, gs.w, voidage,
                            gs.rho, self.solver.props.viscosity, self._inv_dbar, gd.dx, gd.dy, gd.dz,
                            self.mapping.minimum_voidage, *self._periodic, self._fold, self._kp, *self._sums,
                            self._kp_cells, *self._face_volumes, self._face_beta[0], self._face_solids[0],
                            self._face_beta[1], self._face_solids[1], self._face_beta[2], self._face_solids[2],
-                           self._pair_pressure, *self._pressure_voidage)
+                           self._pair_pressure, *self._pressure_voidage, self._valid)
         if bad:
             raise ValueError(f"particle drag: arguments out of range for {bad} particles "
                              "(voidage must lie in (0, 1], gas density > 0)")

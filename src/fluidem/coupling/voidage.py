@@ -275,16 +275,18 @@ class VoidageMapping(BaseModel):
             pos, vel = np.ascontiguousarray(pos), np.ascontiguousarray(vel)
         return self.map_particles(grid, pos, 0.5 * d, math.pi / 6.0 * d**3, vel, periodic)
 
-    def map_particles(self, grid: StaggeredGrid, position, radius, volume, velocity, periodic=None) -> SolidsMap:
+    def map_particles(self, grid: StaggeredGrid, position, radius, volume, velocity, periodic=None,
+                      work=None) -> SolidsMap:
         """``map`` without argument checks, for a coupled run's every gas step.
 
         position, velocity : (N, ≥2) float64 [m], [m/s]; radius (N,) [m] > 0 and volume (N,) = π/6 (2r)³ [m³].
         One compiled call (``_voidage_kernels.map_solids``; on a 3D grid ``_voidage3d_kernels.map_solids3d``, with
-        position and velocity (N, 3) and ``periodic`` (px, py, pz) the axes that wrap).
+        position and velocity (N, 3), ``periodic`` (px, py, pz) the axes that wrap and ``work`` the caller's float64
+        scratch of the deposit, or None).
         """
         self._check(grid.dimensions)
         if grid.dimensions == 3:
-            return self._map3d(grid, position, radius, volume, velocity, periodic)
+            return self._map3d(grid, position, radius, volume, velocity, periodic, work)
         mcode, wcode = _codes(self.method, self.velocity_weighting)
         rx, ry, steps = _diffusion_steps(grid, self.smoothing_width) if self.smoothing_width > 0.0 else (0.0, 0.0, 0)
         shape = grid.shape
@@ -294,7 +296,7 @@ class VoidageMapping(BaseModel):
                                self.minimum_voidage, eps, su, sv)
         return SolidsMap(eps, su, sv, int(clipped))
 
-    def _map3d(self, grid, position, radius, volume, velocity, periodic) -> SolidsMap:
+    def _map3d(self, grid, position, radius, volume, velocity, periodic, work=None) -> SolidsMap:
         """``map_particles`` on a 3D grid."""
         mcode, wcode = _codes(self.method, self.velocity_weighting, 3)
         w = self.smoothing_width
@@ -302,5 +304,5 @@ class VoidageMapping(BaseModel):
         eps, su, sv, sw = (np.empty(grid.shape) for _ in range(4))
         clipped = K3.map_solids3d(mcode, wcode, position, radius, volume, velocity, grid.dx, grid.dy, grid.dz,
                                   *_periodic3(periodic), grid.cell_volume, rx, ry, rz, steps, self.minimum_voidage,
-                                  eps, su, sv, sw)
+                                  eps, su, sv, sw, work)
         return SolidsMap(eps, su, sv, int(clipped), sw)

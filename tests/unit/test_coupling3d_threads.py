@@ -1,0 +1,298 @@
+"""The 3D coupling kernels (_voidage3d_kernels, _paired3d_kernels) give bitwise (==) the same numbers on one
+thread and on two, and the same as the plain serial sums they replace: each sphere's exact volume in each cell
+summed per cell by ``sphere_box_volume`` and added in particle order, each particle's centre cell, K_p and face
+sums, and the gas force per particle. Random packings with spheres straddling cell faces, edges and corners
+and poking through the domain's sides, on walled and on periodic axes; more particles than one work chunk
+(``CHUNK``) so that the parallel passes run."""
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+import pytest
+
+from fluidem.coupling import _paired3d_kernels as P3
+from fluidem.coupling import _voidage3d_kernels as VK3
+from fluidem.coupling._voidage_kernels import cell_index
+
+CELLS = (6, 5, 4)
+SPACING = (2.0e-3, 2.4e-3, 2.2e-3)  # [m]
+N = 700  # > 2 CHUNK: the parallel passes split the particles
+PERIODIC = [(False, False, False), (True, False, True), (True, True, True)]
+
+
+def packing(seed=5, dmax=1.8e-3):
+    """N spheres (diameters 0.4–1 dmax) anywhere in the box and up to a radius beyond its sides; a fifth of
+    the centres put on cell faces, edges and corners."""
+    rng = np.random.default_rng(seed)
+    size = np.array(CELLS) * np.array(SPACING)
+    r = 0.5 * rng.uniform(0.4, 1.0, N) * dmax
+    pos = rng.uniform(-r[:, None], size[None, :] + r[:, None])
+    h = np.array(SPACING)
+    m = N // 5
+    pos[:m] = np.round(pos[:m] / h) * h  # on corners
+    pos[m:2 * m, 1] = np.round(pos[m:2 * m, 1] / h[1]) * h[1]  # on a y face
+    pos[2 * m:3 * m, :2] = np.round(pos[2 * m:3 * m, :2] / h[:2]) * h[:2]  # on a z edge
+    vel = rng.normal(0.0, 0.3, (N, 3))
+    return np.ascontiguousarray(pos), r, vel
+
+
+def reference_volume(pos, r, vel, periodic):
+    """Each sphere's exact volume in each cell it overlaps (``sphere_box_volume``), added to the cells in particle
+    order: the serial deposit of the volume map before it kept node values."""
+    nx, ny, nz = CELLS
+    out = [np.zeros(CELLS) for _ in range(4)]
+    for p in range(pos.shape[0]):
+        rng_ = []
+        for a in range(3):
+            d, n = SPACING[a], CELLS[a]
+            lo, hi = int(math.floor((pos[p, a] - r[p]) / d)), int(math.floor((pos[p, a] + r[p]) / d))
+            if not periodic[a]:
+                lo, hi = min(max(lo, 0), n - 1), min(max(hi, 0), n - 1)
+            rng_.append((lo, hi))
+        (a0, a1), (b0, b1), (c0, c1) = rng_
+        if a0 == a1 and b0 == b1 and c0 == c1:
+            v = 1.0 * 4.0 / 3.0 * math.pi * r[p] * r[p] * r[p]
+            cells = [((a0 % nx, b0 % ny, c0 % nz), v)]
+        else:
+            cells = []
+            for i in range(a0, a1 + 1):
+                for j in range(b0, b1 + 1):
+                    for k in range(c0, c1 + 1):
+                        b = []
+                        for a, m in enumerate((i, j, k)):
+                            d, n = SPACING[a], CELLS[a]
+                            lo, hi = m * d, (m + 1) * d
+                            if not periodic[a]:
+                                lo = -math.inf if m == 0 else lo
+                                hi = math.inf if m == n - 1 else hi
+                            b += [lo, hi]
+                        v = VK3.sphere_box_volume(pos[p, 0], pos[p, 1], pos[p, 2], r[p], *b)
+                        if v > 0.0:
+                            cells.append(((i % nx, j % ny, k % nz), v * 1.0))
+        for c, v in cells:
+            out[0][c] += v
+            for a in range(3):
+                out[a + 1][c] += v * vel[p, a]
+    return out
+
+
+def with_threads(n, fn, *args):
+    """fn(*args) with n Numba threads."""
+    before = numba.get_num_threads()
+    numba.set_num_threads(min(n, numba.config.NUMBA_NUM_THREADS))
+    try:
+        return fn(*args)
+    finally:
+        numba.set_num_threads(before)
+
+
+def volume_map(pos, r, vel, periodic, work):
+    out = [np.zeros(CELLS) for _ in range(4)]
+    VK3.volume_deposit(pos, r, np.ones(pos.shape[0]), vel, *SPACING, *periodic, *out, work)
+    return out
+
+
+def centroid_map(pos, w, vel, work):
+    out = [np.zeros(CELLS) for _ in range(4)]
+    VK3.centroid_deposit3d(pos, w, vel, *SPACING, *out, work)
+    return out
+
+
+@pytest.mark.parametrize("periodic", PERIODIC)
+def test_volume_deposit_equals_the_serial_sums(periodic):
+    """Node values summed per cell == ``sphere_box_volume`` per cell, on 1 and 2 threads, with an owned scratch,
+    a scratch allocated inside (None) and one too short (allocated inside too)."""
+    pos, r, vel = packing()
+    ref = reference_volume(pos, r, vel, periodic)
+    stride = VK3.volume_stride(r, *SPACING, *CELLS, *periodic)
+    assert stride == 27 + 1 + 4 * 8  # spheres under one cell across: at most 2 cells, 3 nodes, per axis
+    for threads in (1, 2):
+        for work in (np.empty(N * stride), None, np.empty(3)):
+            got = with_threads(threads, volume_map, pos, r, vel, periodic, work)
+            for a in range(4):
+                assert np.array_equal(got[a], ref[a]), (threads, a)
+    straddling = sum(1 for p in range(N) if np.any(np.floor((pos[p] - r[p]) / SPACING) !=
+                                                   np.floor((pos[p] + r[p]) / SPACING)))
+    assert straddling > N // 2  # the test is about spheres cut by cell faces
+
+
+def test_volume_deposit_spheres_larger_than_a_cell():
+    """Spheres spanning up to four cells per axis (stride from the largest) and, on a periodic axis, wrapping onto
+    themselves: still == the serial sums, and Σ kept."""
+    periodic = (True, False, True)
+    pos, r, vel = packing(seed=9, dmax=6.0e-3)
+    ref = reference_volume(pos, r, vel, periodic)
+    for threads in (1, 2):
+        got = with_threads(threads, volume_map, pos, r, vel, periodic, None)
+        for a in range(4):
+            assert np.array_equal(got[a], ref[a])
+    assert got[0].sum() == pytest.approx(4.0 / 3.0 * math.pi * np.sum(r**3), rel=1e-13)
+
+
+def test_centroid_deposit_equals_the_serial_sums():
+    pos, r, vel = packing(seed=6)
+    w = 4.0 / 3.0 * math.pi * r**3
+    ref = [np.zeros(CELLS) for _ in range(4)]
+    for p in range(N):
+        c = tuple(cell_index(pos[p, a], 1.0 / SPACING[a], CELLS[a]) for a in range(3))
+        ref[0][c] += w[p]
+        for a in range(3):
+            ref[a + 1][c] += w[p] * vel[p, a]
+    for threads in (1, 2):
+        for work in (np.empty(N), None):
+            got = with_threads(threads, centroid_map, pos, w, vel, work)
+            for a in range(4):
+                assert np.array_equal(got[a], ref[a])
+
+
+@pytest.mark.parametrize("method", [0, 3])
+@pytest.mark.parametrize("weighting", [0, 1])
+def test_map_solids3d_same_on_one_and_two_threads(method, weighting):
+    """The whole map (deposit, smoothing, clipping, averages) == on 1 and 2 threads, periodic x and z."""
+    pos, r, vel = packing(seed=4)
+    vol = 4.0 / 3.0 * math.pi * r**3
+    cell = float(np.prod(SPACING))
+
+    def run():
+        out = [np.empty(CELLS) for _ in range(4)]
+        clipped = VK3.map_solids3d(method, weighting, pos, r, vol, vel, *SPACING, True, False, True, cell,
+                                   0.1, 0.1, 0.1, 2, 0.3, *out, np.empty(N * 60))
+        return clipped, out
+
+    c1, one = with_threads(1, run)
+    c2, two = with_threads(2, run)
+    assert c1 == c2
+    for a in range(4):
+        assert np.array_equal(one[a], two[a])
+
+
+def gas_fields(seed=8):
+    """Random gas velocities on the faces, voidage in [0.4, 0.95], density and pressure at the centres."""
+    rng = np.random.default_rng(seed)
+    nx, ny, nz = CELLS
+    u = rng.normal(0.5, 0.4, (nx + 1, ny, nz))
+    v = rng.normal(1.0, 0.4, (nx, ny + 1, nz))
+    w = rng.normal(-0.2, 0.4, (nx, ny, nz + 1))
+    eps = rng.uniform(0.4, 0.95, CELLS)
+    rho = rng.uniform(1.1, 1.3, CELLS)
+    p = rng.normal(0.0, 50.0, CELLS)
+    return u, v, w, eps, rho, p
+
+
+def face_sums_reference(pos, vel, vol, kp, periodic, fold):
+    """A_f, B_f of the three face directions, Σ K_p of each cell and Σ_p w_pf V_p (∇p weights), added in particle
+    order with the weights of ``_paired3d_kernels._axis``, written out in Python: the serial pass of ``deposit3d``."""
+    nx, ny, nz = CELLS
+    shapes = [(nx + 1, ny, nz), (nx, ny + 1, nz), (nx, ny, nz + 1)]
+    A = [np.zeros(s) for s in shapes]
+    B = [np.zeros(s) for s in shapes]
+    E = [np.zeros(s) for s in shapes]
+    KC = np.zeros(CELLS)
+
+    def add(F, i, a, j, b, k, c, q):
+        for s in range(2):
+            for t in range(2):
+                for r in range(2):
+                    F[i[s], j[t], k[r]] += a[s] * b[t] * c[r] * q
+
+    for q in range(pos.shape[0]):
+        ax = [P3._axis(pos[q, m], 1.0 / SPACING[m], CELLS[m], periodic[m], fold) for m in range(3)]
+        g = [P3._face_axis(pos[q, m], 1.0 / SPACING[m], CELLS[m], periodic[m], True) for m in range(3)]
+        cn = [(a[0], a[1]) for a in ax]
+        cw = [(a[2], a[3]) for a in ax]
+        fn = [(a[4], a[5]) for a in ax]
+        fw = [(a[6], a[7]) for a in ax]
+        gn = [(a[0], a[1]) for a in g]
+        gw = [(a[2], a[3]) for a in g]
+        add(E[0], gn[0], gw[0], cn[1], cw[1], cn[2], cw[2], vol[q])
+        add(E[1], cn[0], cw[0], gn[1], gw[1], cn[2], cw[2], vol[q])
+        add(E[2], cn[0], cw[0], cn[1], cw[1], gn[2], gw[2], vol[q])
+        k = kp[q]
+        cell = tuple(min(max(int(pos[q, m] * (1.0 / SPACING[m])), 0), CELLS[m] - 1) for m in range(3))
+        KC[cell] += k
+        for m in range(3):
+            nodes = [fn[a] if a == m else cn[a] for a in range(3)]
+            wts = [fw[a] if a == m else cw[a] for a in range(3)]
+            add(A[m], nodes[0], wts[0], nodes[1], wts[1], nodes[2], wts[2], k)
+            add(B[m], nodes[0], wts[0], nodes[1], wts[1], nodes[2], wts[2], k * vel[q, m])
+    return A, B, KC, E
+
+
+@pytest.mark.parametrize("periodic", PERIODIC)
+@pytest.mark.parametrize("fold", [True, False])
+def test_deposit3d_and_forces_equal_the_serial_sums(periodic, fold):
+    """K_p of the whole set (parallel chunks) == K_p of each particle alone; the face sums, cell sums and pressure
+    voidage == the sums in particle order; the forces (plain and split) == each particle's alone; on 1 and 2
+    threads, with owned scratch and with scratch allocated inside."""
+    from fluidem.coupling.drag import drag_laws
+    from fluidem.coupling.exchange3d import face_volumes3d
+
+    pos, r, vel = packing(seed=12)
+    size = np.array(CELLS) * np.array(SPACING)
+    pos = np.ascontiguousarray(np.clip(pos, 0.0, size))  # centres in the box: the kernels clamp outside ones
+    vol = 4.0 / 3.0 * math.pi * r**3
+    u, v, w, eps, rho, p = gas_fields()
+    law = drag_laws.get("gidaspow")().pack()
+    mu, mv = 1.8e-5, 0.3
+    inv_dbar = np.zeros((0, 0, 0))
+    VF = face_volumes3d(CELLS, periodic, float(np.prod(SPACING)))
+    shapes = [f.shape for f in VF]
+
+    def kp_alone():
+        kp, valid = np.empty(N), np.empty(N, np.bool_)
+        for q in range(N):
+            P3.kp3d(law, pos[q:q + 1], vel[q:q + 1], r[q:q + 1], vol[q:q + 1], u, v, w, eps, rho, mu, inv_dbar,
+                    *SPACING, mv, *periodic, fold, kp[q:q + 1], valid[q:q + 1])
+        assert valid.all()
+        return kp
+
+    def deposit(scratch):
+        kp = np.empty(N)
+        sums = [np.empty(s) for s in shapes for _ in range(2)]
+        KC = np.empty(CELLS)
+        coef = [np.empty(s) for s in shapes for _ in range(2)]
+        E = [np.empty(s) for s in shapes]
+        extra = (np.empty(N, np.bool_),) if scratch else ()
+        bad = P3.deposit3d(law, pos, vel, r, vol, u, v, w, eps, rho, mu, inv_dbar, *SPACING, mv, *periodic, fold, kp,
+                           *sums, KC, *VF, *coef, True, *E, *extra)
+        assert bad == 0
+        return kp, sums, KC, coef, E
+
+    kp_ref = kp_alone()
+    A, B, KC_ref, E_ref = face_sums_reference(pos, vel, vol, kp_ref, periodic, fold)
+    runs = [with_threads(t, deposit, s) for t in (1, 2) for s in (True, False)]
+    for kp, sums, KC, coef, E in runs:
+        assert np.array_equal(kp, kp_ref)
+        assert np.array_equal(KC, KC_ref)
+        for m in range(3):
+            assert np.array_equal(sums[2 * m], A[m]) and np.array_equal(sums[2 * m + 1], B[m])
+            assert np.array_equal(coef[2 * m], A[m] / VF[m])
+            assert np.array_equal(coef[2 * m + 1], np.where(A[m] > 0.0, B[m] / np.where(A[m] > 0, A[m], 1.0), 0.0))
+            assert np.array_equal(E[m], np.maximum(1.0 - E_ref[m] / VF[m], mv))
+
+    def forces(split):
+        out, total = np.zeros((N, 3)), np.ones((N, 3))
+        damp = np.full(N, 0.5)
+        if split:
+            P3.particle_forces_split3d(pos, vel, vol, kp_ref, u, v, w, p, *SPACING, *periodic, fold, True, out, damp,
+                                       total)
+        else:
+            P3.particle_forces3d(pos, vel, vol, kp_ref, u, v, w, p, *SPACING, *periodic, fold, True, out, total)
+        return out, total, damp
+
+    for split in (False, True):
+        ref = [np.zeros((N, 3)), np.ones((N, 3)), np.full(N, 0.5)]
+        for q in range(N):
+            s = slice(q, q + 1)
+            if split:
+                P3.particle_forces_split3d(pos[s], vel[s], vol[s], kp_ref[s], u, v, w, p, *SPACING, *periodic, fold,
+                                           True, ref[0][s], ref[2][s], ref[1][s])
+            else:
+                P3.particle_forces3d(pos[s], vel[s], vol[s], kp_ref[s], u, v, w, p, *SPACING, *periodic, fold, True,
+                                     ref[0][s], ref[1][s])
+        for t in (1, 2):
+            got = with_threads(t, forces, split)
+            for a in range(3):
+                assert np.array_equal(got[a], ref[a]), (split, t, a)

@@ -1,7 +1,7 @@
 """Validation: the 3D bubbling bed of 50,000 spheres (``bubbling-3d-large``) against W/A and Darton et al. (1977).
 
-The case is our set-up (no published 3D bed of 50,000-100,000 spheres with its numbers could be read in stored
-text; docs/gallery.md): 3 mm spheres of 1000 kg/m³ in a 150 × 75 mm column at U = 1.7 m/s, twice Wen & Yu's
+The case is our set-up (no published 3D bed of 50,000-100,000 spheres with all its numbers could be checked;
+docs/gallery.md): 3 mm spheres of 1000 kg/m³ in a 150 × 75 mm column at U = 1.7 m/s, twice Wen & Yu's
 u_mf of 0.85 m/s. The run goes to ``T_END``; over ``T_FROM``-``T_END`` (the bed has settled from its lattice and
 bubbles by 0.3 s) ``bed3d_report.py`` gives:
 

@@ -2,8 +2,8 @@
 
 The case is our set-up (no published 3D bed of 50,000-100,000 spheres with all its numbers could be checked;
 docs/gallery.md): 3 mm spheres of 1000 kg/m³ in a 150 × 75 mm column at U = 1.7 m/s, twice Wen & Yu's
-u_mf of 0.85 m/s. The run goes to ``T_END``; over ``T_FROM``-``T_END`` (the bed has settled from its lattice and
-bubbles by 0.3 s) ``bed3d_report.py`` gives:
+u_mf of 0.85 m/s. The run goes to ``T_END``; over ``T_FROM``-``T_END`` (the lattice has fallen and the bed bubbles
+and slugs, in cycles of ~0.4 s: a shorter window holds too few of them) ``bed3d_report.py`` gives:
 
 - the bed pressure drop against the buoyant weight over area, W/A = 615.6 Pa (required: within 5 %; the 3D
   sweep bed of ``test_umf_sweep_3d.py`` rests 3 % of its weight on the floor in its slugging plateau, and the
@@ -14,8 +14,13 @@ bubbles by 0.3 s) ``bed3d_report.py`` gives:
   means within a factor 1.5: cells of 3.3 d read a bubble of a few cells to about ±30 % in volume, and the
   correlation is a fit to the bubbles of wide beds, this bed's depth of 75 mm is ~1.5 D_b).
 
-``FLUIDEM_BED3D_RUN=DIR`` checks an existing run directory of the case (reaching ``T_END``) instead of running
-one. The run takes about an hour of two cores:
+Measured (``fluidem run bubbling-3d-large --until 5 --threads 2``, read at 2.16 s; 0.5-2.0 s): Δp 607.2 ± 167.5 Pa,
+0.986 W/A; 26 bubbles in the middle half of the bed, mean D_eq 53.9 mm, 1.28 × Darton's. Over 0.5-1.5 s the same
+run gave 0.977 W/A and 1.82 × Darton's (11 bubbles): the bubble figure needs the longer window. The bed slugs at
+times (voids across the whole 150 × 75 mm section), which Darton's fit for free bubbles does not describe.
+
+``FLUIDEM_BED3D_RUN=DIR`` checks an existing run directory of the case (reaching ``T_END``; its whole record from
+``T_FROM`` on) instead of running one. The run took 1 h 35 min of two shared cores (load 4-10) to 2 s:
 
     nice -n 19 python3 -m pytest -m validation tests/validation/test_bubbling_3d_large.py -s
 """
@@ -32,7 +37,7 @@ from bed3d_report import bed_numbers, bubble_sizes, darton_diameter, pressure_an
 pytestmark = pytest.mark.validation
 
 T_FROM = 0.5  # [s] start of the window: the lattice has fallen and the bed bubbles
-T_END = 1.5  # [s]
+T_END = 2.0  # [s]
 DP_TOLERANCE = 0.05  # |Δp / (W/A) − 1|
 DARTON_FACTOR = 1.5  # mean D_eq / mean Darton D_b within [1/1.5, 1.5]
 

@@ -3,7 +3,7 @@
 Work: particle-steps N × t_end / dt, with dt the case's ``time.dt`` or ``dt_fraction`` × the contact time
 of the smallest sphere of each species with itself under the case's contact law (the soft-sphere engine
 takes the shortest over all pairs and walls, which for the built-in cases is the same within a few per
-cent), or the gas step DT for hard spheres; plus, with a gas, gas steps × cells. The rates are one core's,
+cent), or the gas step DT for hard spheres; plus, with a gas, gas steps × cells (all of a 3D grid's). The rates are one core's,
 measured on the 2-core development machine in long runs (compile time excluded): a coupled soft-sphere
 bed (``binary-density``, 5 s) ran 5.8e6 particle-steps/s with 2.2 ms per gas step of 450 cells; hard
 spheres (``hoomans-orifice``) about 1e6 particle-steps/s. The estimate is good to a factor of 2 or 3:
@@ -52,8 +52,8 @@ def wall_time_estimate(case) -> float | None:
     end = case.time.end
     seconds = n * end / dt / (HARD_RATE if case.particles.contact.instantaneous else SOFT_RATE)
     if case.gas is not None:
-        nx, ny = case.gas.grid.cells[:2]
-        seconds += end / case.gas.dt * max(nx * ny * GAS_CELL_STEP, 1e-3)
+        cells = math.prod(case.gas.grid.cells)  # every axis: nx × ny, or nx × ny × nz on a 3D grid
+        seconds += end / case.gas.dt * max(cells * GAS_CELL_STEP, 1e-3)
     return seconds
 
 

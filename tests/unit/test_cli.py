@@ -562,6 +562,17 @@ def test_cases_shows_each_case_size_length_and_a_rough_wall_time(capsys):
     assert 1.0 < wall_time_estimate(case) < 60.0  # 500 particles × 1e5 steps at millions of particle-steps/s
 
 
+def test_the_wall_time_estimate_counts_every_cell_of_a_3d_gas_grid():
+    """The gas term is gas steps × cells: a 3D grid of twice the depth in cells costs twice the gas time."""
+    from fluidem.estimate import GAS_CELL_STEP, wall_time_estimate
+
+    base = load_case("bubbling-3d-large", {"time.end": 1.0})
+    deep = load_case("bubbling-3d-large", {"time.end": 1.0, "gas.grid.cells": [15, 35, 16]})
+    gas_steps = 1.0 / base.gas.dt
+    assert wall_time_estimate(deep) - wall_time_estimate(base) == pytest.approx(
+        gas_steps * 15 * 35 * 8 * GAS_CELL_STEP, rel=1e-9)
+
+
 # ---------------------------------------------------------------- the end of a run
 def test_a_run_ends_at_the_time_asked_with_its_last_probe_row_and_snapshot(tmp_path, capsys):
     """--until between two steps: the run takes the step that reaches it (never stops short), and the probe

@@ -50,22 +50,14 @@ def device_exchange3d(coupling):
 class DeviceExchange3D(DeviceExchange):
     """Device arrays and launches of the 3D coupling's particle side (module docstring)."""
 
-    def __init__(self, coupling):
-        from numba import cuda
-
+    @staticmethod
+    def _kernel_modules():
         from . import _paired3d_cuda, _voidage3d_cuda
 
-        self._cuda, self._pc, self._vc = cuda, _paired3d_cuda, _voidage3d_cuda
-        self.coupling = coupling
-        engine = coupling.engine
-        self.engine = engine
-        gd = coupling.grid
-        self.n = engine.state.n
-        self.law = cuda.to_device(np.ascontiguousarray(coupling._law))
-        self._volume_of = None
-        self.volume = cuda.device_array(max(self.n, 1))
-        self.kp = cuda.to_device(np.zeros(max(self.n, 1)))
-        self.bad = cuda.to_device(np.zeros(1, dtype=np.int32))
+        return _paired3d_cuda, _voidage3d_cuda
+
+    def _grid_arrays(self, gd) -> None:
+        cuda = self._cuda
         # Σ V_p (or Σ V_pc), count, Σ w v_x, Σ w v_y, Σ w v_z
         self._cells = tuple(cuda.device_array(gd.shape) for _ in range(5))
         self._host_cells = tuple(np.empty(gd.shape) for _ in range(5))

@@ -57,9 +57,8 @@ class DeviceExchange:
     def __init__(self, coupling):
         from numba import cuda
 
-        from . import _paired_cuda, _voidage_cuda
-
-        self._cuda, self._pc, self._vc = cuda, _paired_cuda, _voidage_cuda
+        self._cuda = cuda
+        self._pc, self._vc = self._kernel_modules()
         self.coupling = coupling
         engine = coupling.engine
         self.engine = engine
@@ -70,6 +69,18 @@ class DeviceExchange:
         self.volume = cuda.device_array(max(self.n, 1))
         self.kp = cuda.to_device(np.zeros(max(self.n, 1)))
         self.bad = cuda.to_device(np.zeros(1, dtype=np.int32))
+        self._grid_arrays(gd)
+
+    @staticmethod
+    def _kernel_modules():
+        """The paired-exchange and voidage CUDA modules of the grid's dimension."""
+        from . import _paired_cuda, _voidage_cuda
+
+        return _paired_cuda, _voidage_cuda
+
+    def _grid_arrays(self, gd) -> None:
+        """The device cell, face-sum and gas arrays of the grid ``gd`` and the host copies of the cell sums."""
+        cuda = self._cuda
         self._cells = tuple(cuda.device_array(gd.shape) for _ in range(4))  # Σ V_p, count, Σ w v_x, Σ w v_y
         self._host_cells = tuple(np.empty(gd.shape) for _ in range(4))
         self._sums = {k: cuda.device_array(s) for k, s in (("AU", gd.u_shape), ("BU", gd.u_shape), ("AV", gd.v_shape),

@@ -5,6 +5,8 @@
     python benchmarks/gas3d_step.py --grids 20x25x20 --linear-solver multigrid,superlu --repeat 3
     python benchmarks/gas3d_step.py --grids 10x12x10 --seconds 0.2 --repeat 1                 # a quick check
     python benchmarks/gas3d_step.py --grids 20x25x20,40x60x40 --matrices 6 --repeat 3        # against pyamg
+    python benchmarks/gas3d_step.py --grids 20x25x20,40x60x40,100x100x100 --kernels 2 --seconds 3 --warmup 3
+                                                                  # the step's kernels, GMRES's parts
 
 Problem ``NXxNYxNZ``: a 3D bubbling bed, 0.2 m x 0.4 m x 0.2 m (y up), ideal gas, inflow at the bottom
 through influx cells of voidage 0.4: 0.6 m/s superficial background and a central circular jet of
@@ -31,6 +33,17 @@ matrix ("setup+solve") and, a lower bound for a scheme that would keep it, made 
 matrices and reused for all ("one setup for all").
 Printed per grid and solver: CPU microseconds per cell and solve (median over the rounds, each round
 all K matrices), iterations per solve, and the largest ||b - A x|| / target (<= 1: each reached its target).
+
+``--kernels K``: where a step's time goes, one round. The bed (multigrid) runs ``--warmup`` steps, then
+``--seconds`` of steps with every kernel call of ``GasSolver3D`` timed (``_solver3d_kernels``: begin_step,
+predict_residual, assemble_pressure, correct_pressure, courant_number, end_step; ``_multigrid3d_kernels``:
+mg_setup, gmres): CPU µs per cell and call, calls per step, µs per cell and step ("whole step": ``advance``;
+the rest of it is Python). Then GMRES is replayed on the first K corrections of those steps (repeated for
+at least 1 CPU second, after one untimed pass) and split, per iteration: ``mg_cycle`` alone as many times
+as GMRES iterated, ``mg_matvec`` once more (the products, and the true residual's), the Krylov part (the
+rest: Gram-Schmidt, the updates of x), and the cycle level by level ("down": the sweeps before the coarse
+correction and the restriction, one pass; "up": the prolongation and the sweeps after it; Python drives
+the level loop there, which adds a few µs per call to the small levels).
 """
 from __future__ import annotations
 

@@ -5,6 +5,8 @@
     python benchmarks/gas3d_step.py --grids 20x25x20 --linear-solver multigrid,superlu --repeat 3
     python benchmarks/gas3d_step.py --grids 10x12x10 --seconds 0.2 --repeat 1                 # a quick check
     python benchmarks/gas3d_step.py --grids 20x25x20,40x60x40 --matrices 6 --repeat 3        # against pyamg
+    python benchmarks/gas3d_step.py --grids 20x25x20,40x60x40,100x100x100 --kernels 2 --seconds 3 --warmup 3
+                                                                  # the step's kernels, GMRES's parts
 
 Problem ``NXxNYxNZ``: a 3D bubbling bed, 0.2 m x 0.4 m x 0.2 m (y up), ideal gas, inflow at the bottom
 through influx cells of voidage 0.4: 0.6 m/s superficial background and a central circular jet of
@@ -31,6 +33,17 @@ matrix ("setup+solve") and, a lower bound for a scheme that would keep it, made 
 matrices and reused for all ("one setup for all").
 Printed per grid and solver: CPU microseconds per cell and solve (median over the rounds, each round
 all K matrices), iterations per solve, and the largest ||b - A x|| / target (<= 1: each reached its target).
+
+``--kernels K``: where a step's time goes, one round. The bed (multigrid) runs ``--warmup`` steps, then
+``--seconds`` of steps with every kernel call of ``GasSolver3D`` timed (``_solver3d_kernels``: begin_step,
+predict_residual, assemble_pressure, correct_pressure, courant_number, end_step; ``_multigrid3d_kernels``:
+mg_setup, gmres): CPU µs per cell and call, calls per step, µs per cell and step ("whole step": ``advance``;
+the rest of it is Python). Then GMRES is replayed on the first K corrections of those steps (repeated for
+at least 1 CPU second, after one untimed pass) and split, per iteration: ``mg_cycle`` alone as many times
+as GMRES iterated, ``mg_matvec`` once more (the products, and the true residual's), the Krylov part (the
+rest: Gram-Schmidt, the updates of x), and the cycle level by level ("down": the sweeps before the coarse
+correction and the restriction, one pass; "up": the prolongation and the sweeps after it; Python drives
+the level loop there, which adds a few µs per call to the small levels).
 """
 from __future__ import annotations
 
@@ -201,6 +214,140 @@ def solve_matrices(grid: str, warmup: int, count: int, repeat: int) -> list[list
              worst[name]] for name in variants]
 
 
+def kernel_split(grid: str, seconds: float, warmup: int, count: int) -> list[list]:
+    """Rows of the ``--kernels`` table for ``grid``: CPU µs per cell of each kernel call of a step, and of
+    the parts of ``MK.gmres`` replayed on ``count`` kept pressure corrections."""
+    from fluidem.gas import _multigrid3d_kernels as MK
+    from fluidem.gas import solver3d as S3
+    from fluidem.gas.solver import KRYLOV_MAX
+
+    nx, ny, nz = (int(k) for k in grid.split("x"))
+    n = nx * ny * nz
+    solver, state, step_args, dt = bed_problem(nx, ny, nz, "multigrid")
+    t = 0.0
+    for _ in range(warmup):
+        solver.advance(state, dt, t, **step_args(state, t, dt))
+        t += dt
+    cpu, calls, kept, saved = {}, {}, [], []
+
+    def wrap(mod, name):
+        f = getattr(mod, name)
+        saved.append((mod, name, f))
+
+        def timed_call(*args):
+            if name == "gmres" and len(kept) < count:
+                kept.append((solver.MAT[0].copy(), args[-4].copy(), float(args[-2])))
+            c0 = time.process_time()
+            r = f(*args)
+            cpu[name] = cpu.get(name, 0.0) + time.process_time() - c0
+            calls[name] = calls.get(name, 0) + 1
+            return r
+
+        setattr(mod, name, timed_call)
+
+    for mod, names in ((S3.K3, ("begin_step", "predict_residual", "assemble_pressure", "correct_pressure",
+                                "courant_number", "end_step")), (S3.MK, ("mg_setup", "gmres"))):
+        for name in names:
+            wrap(mod, name)
+    steps, whole = 0, 0.0
+    try:
+        wall0 = time.perf_counter()
+        while time.perf_counter() - wall0 < seconds or steps < 3:
+            kw = step_args(state, t, dt)
+            c0 = time.process_time()
+            solver.advance(state, dt, t, **kw)
+            whole += time.process_time() - c0
+            t += dt
+            steps += 1
+    finally:
+        for mod, name, f in saved:
+            setattr(mod, name, f)
+    rows = [[grid, n, "whole step", 1e6 * whole / (n * steps), 1.0, 1e6 * whole / (n * steps)]]
+    for name in sorted(cpu, key=lambda k: -cpu[k]):
+        rows.append([grid, n, name, 1e6 * cpu[name] / (n * calls[name]), calls[name] / steps,
+                     1e6 * cpu[name] / (n * steps)])
+    # GMRES replayed: the whole solve, then its iterations' cycles and matrix products alone
+    mg = solver._mg
+    x = np.zeros(n)
+    levels = mg.MGL.shape[1] - 1
+    def replay(part):
+        its_all = 0
+        for data, b, target in kept:
+            MK.mg_setup(data, mg.ell, mg.MGL, mg.MGI, mg.MGA, mg.MGS, mg.MGW, mg.DLU, mg.PIV)
+            c0 = time.process_time()
+            its = MK.gmres(mg.MGL, mg.MGI, mg.MGA, mg.MGS, mg.MGW, mg.DLU, mg.PIV, mg.KRY, mg.HES, b, x, target,
+                           KRYLOV_MAX)
+            part["gmres"] = part.get("gmres", 0.0) + time.process_time() - c0
+            its_all += its
+            v, z = b / np.linalg.norm(b), np.zeros(n)
+            c0 = time.process_time()
+            for _ in range(its):
+                MK.mg_cycle(mg.MGL, mg.MGI, mg.MGA, mg.MGS, mg.MGW, mg.DLU, mg.PIV, v, z)
+            part["cycle"] = part.get("cycle", 0.0) + time.process_time() - c0
+            c0 = time.process_time()
+            for _ in range(its + 1):  # the iterations' products and the true residual's
+                MK.mg_matvec(mg.MGL, mg.MGI, mg.MGA, z, v)
+            part["matvec"] = part.get("matvec", 0.0) + time.process_time() - c0
+            v = b / np.linalg.norm(b)
+            for _ in range(its):  # the cycle level by level (mg_cycle's loop driven from here)
+                _cycle_by_level(MK, mg, v, z, part)
+        return its_all
+
+    replay({})  # untimed: compiles, and brings the arrays in
+    part, its_all, passes = {}, 0, 0
+    while passes < 2 or part["gmres"] < 1.0:
+        its_all += replay(part)
+        passes += 1
+    part["krylov"] = part["gmres"] - part["cycle"] - part["matvec"]
+    k = max(its_all, 1)
+    rows.append([grid, n, f"gmres replayed ({its_all / (passes * len(kept)):.1f} it/solve)", 1e6 * part["gmres"] / (n * k), "per it",
+                 None])
+    for name in ["cycle", "matvec", "krylov"] + [f"level {l} {w}" for l in range(levels)
+                                                   for w in ("down", "up", "coarsest")]:
+        if name in part:
+            rows.append([grid, n, "  " + name, 1e6 * part[name] / (n * k), "per it", None])
+    return rows
+
+
+def _cycle_by_level(MK, mg, b, x, part):
+    """``MK.mg_cycle`` with its loop in Python, each level's pass timed into ``part`` (CPU s)."""
+    MGL, MGI, MGW = mg.MGL, mg.MGI, mg.MGW
+    levels = MGL.shape[1] - 1
+    X, B, visits = MGW[MK.MG_X], MGW[MK.MG_B], [0] * (levels + 1)
+    top = levels - 1
+    l, down = 0, True
+
+    def run(key, f, *args):
+        c0 = time.process_time()
+        f(*args)
+        part[key] = part.get(key, 0.0) + time.process_time() - c0
+
+    while True:
+        if down:
+            if l == top:
+                run(f"level {l} coarsest", MK._mg_coarsest, MGL, mg.DLU, mg.PIV, X, B)
+                down = False
+                continue
+            wrap = MGL[1, l] > 1 and MGI[MGL[0, l], MK.MGI_NB] >= 0
+            if l == 0:
+                run("level 0 down", MK._mg_presmooth_restrict, MGL, MGI, mg.MGS, x, b, B, l, wrap, True)
+            else:
+                run(f"level {l} down", MK._mg_presmooth_restrict, MGL, MGI, mg.MGS, X, B, B, l, wrap, visits[l] == 0)
+            l += 1
+            visits[l] = 0
+        else:
+            if l == 0:
+                break
+            visits[l] += 1
+            if l < top and visits[l] < MK.CYCLES and 4 * (MGL[0, l + 1] - MGL[0, l]) <= MGL[0, l] - MGL[0, l - 1]:
+                down = True
+                continue
+            l -= 1
+            wrap = MGL[1, l] > 1 and MGI[MGL[0, l], MK.MGI_NB] >= 0
+            run(f"level {l} up", MK._mg_prolong_postsmooth, MGL, MGI, mg.MGS, x if l == 0 else X, b if l == 0 else B,
+                X, l, wrap)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--grids", default="20x25x20,40x60x40")
@@ -211,10 +358,19 @@ def main(argv=None) -> int:
     ap.add_argument("--matrices", type=int, default=0,
                     help="time the linear solvers alone (fluidem's, pyamg's) on this many pressure corrections")
     harness.add_options(ap, repeat=3)
+    ap.add_argument("--kernels", type=int, default=0,
+                    help="CPU µs per cell of each kernel of a step, and of GMRES's parts on this many corrections")
     a = ap.parse_args(argv)
     import fluidem
 
     print(f"fluidem from {fluidem.__file__}")
+    if a.kernels:
+        rows = []
+        for grid in [g for g in a.grids.split(",") if g]:
+            rows += kernel_split(grid, a.seconds, a.warmup, a.kernels)
+        print(harness.format_table(["grid", "cells", "kernel", "cpu us/cell/call", "calls/step", "cpu us/cell/step"],
+                                   rows))
+        return 0
     if a.matrices:
         rows = []
         for grid in [g for g in a.grids.split(",") if g]:

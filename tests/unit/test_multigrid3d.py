@@ -124,3 +124,43 @@ def test_a_grid_as_small_as_the_coarsest_level_is_solved_exactly():
     assert mg.MGL.shape[1] - 1 == 1
     assert its == 1
     assert np.abs(x - exact).max() < 1e-10 * np.abs(exact).max()
+
+
+@pytest.mark.parametrize("periodic", [(False, False, False), (True, False, True)])
+def test_the_coarse_matrix_is_the_galerkin_product_with_the_couplings_divided_by_the_aggregation_factors(periodic):
+    # level 1 of an 8 x 6 x 8 grid (2 x 1 x 2 aggregation): Pᵀ A P with P the piecewise-constant
+    # prolongation, each coupling along axis q divided by that axis's factor and the row sums kept;
+    # the set-up starts from an MGA of NaN (the slots no entry of A fills must be set to 0)
+    from fluidem.gas._multigrid3d import grid_neighbours
+
+    dims, spacing = (8, 6, 8), (1.0 / 8, 2.0 / 6, 1.0 / 8)
+    A = poisson(dims, spacing, periodic, shift=0.7)
+    A = A + sp.diags(np.linspace(0.0, 0.3, A.shape[0])) @ abs(A)  # rows of unequal weight, not symmetric
+    A = sp.csc_matrix(A)
+    A.sort_indices()
+    h = np.asarray(spacing)
+    weights = tuple(h[(q + 1) % 3] * h[(q + 2) % 3] / h[q] for q in range(3))
+    mg = multigrid_arrays(dims, periodic, A.indices, A.indptr, COARSEST, KRYLOV_RESTART, weights)
+    assert mg.ell.dtype == np.int32 and mg.MGS.dtype == np.float32
+    mg.MGA[:] = np.nan
+    assert MK.mg_setup(A.data, mg.ell, mg.MGL, mg.MGI, mg.MGA, mg.MGS, mg.MGW, mg.DLU, mg.PIV)
+    r = mg.MGL[4:7, 0]
+    coarse = tuple(int(v) for v in mg.MGL[1:4, 1])
+    assert tuple(r) == (2, 1, 2) and coarse == (4, 6, 4)
+    I, J, K = np.meshgrid(*(np.arange(n) for n in dims), indexing="ij")
+    agg = (((I // r[0]) * coarse[1] + J // r[1]) * coarse[2] + K // r[2]).ravel()
+    P = sp.csr_matrix((np.ones(agg.size), (np.arange(agg.size), agg)), shape=(agg.size, int(np.prod(coarse))))
+    C = (P.T @ A @ P).toarray()
+    nb = grid_neighbours(coarse, periodic)
+    o1, o2 = mg.MGL[0, 1], mg.MGL[0, 2]
+    rows = mg.MGA[o1:o2]
+    for t in range(C.shape[0]):
+        expected = [C[t, nb[t, d]] / r[d // 2] if nb[t, d] >= 0 else 0.0 for d in range(6)]
+        assert np.allclose(rows[t, 1:], expected, rtol=1e-13, atol=0.0)
+        assert np.isclose(rows[t, 0], C[t].sum() - sum(expected), rtol=1e-13, atol=0.0)
+    n0 = A.shape[0]
+    fine = np.zeros((n0, 7))
+    fine.reshape(-1)[mg.ell[:A.nnz]] = A.data
+    assert np.array_equal(mg.MGA[:n0], fine)  # the finest level: A's entries, 0 in the slots it leaves empty
+    assert np.array_equal(mg.MGS[:, :7], mg.MGA.astype(np.float32))
+    assert np.allclose(mg.MGS[:, 7], 1.0 / mg.MGA[:, 0], rtol=1e-7)

@@ -25,7 +25,8 @@ SEMI_COARSENING = 0.6  # aggregate the axes coupled at least this fraction as st
 
 class Multigrid3D(NamedTuple):
     """The arrays of ``_multigrid3d_kernels.gmres`` and ``mg_setup`` (layout there) and ``ell``, the row and
-    slot of each matrix entry in MGA."""
+    slot of each matrix entry in MGA (flat index row * 7 + slot), then the slots of the finest level that no
+    entry fills (int32 where the indices fit)."""
 
     MGL: np.ndarray
     MGI: np.ndarray
@@ -114,7 +115,14 @@ def multigrid_arrays(dims: tuple[int, int, int], periodic: tuple[bool, bool, boo
         slot = np.where((rows != cols) & (nbs[0][rows, s] == cols), s + 1, slot)
     if np.any(slot < 0):
         return None
+    ell = rows * NS + slot
+    filled = np.zeros(n * NS, bool)
+    filled[ell] = True
+    if np.count_nonzero(filled) != ell.size:
+        return None  # two entries in one slot
+    ell = np.concatenate([ell, np.flatnonzero(~filled)])  # then the slots that stay 0
     m = sizes[-1]
     N = int(offsets[-1])
-    return Multigrid3D(MGL, MGI, np.zeros((N, NS)), np.zeros((N, NS + 1)), np.zeros((4, N)), np.zeros((m, m)), np.zeros(m, np.int64),
-                       np.zeros((2 * (restart + 1), n)), np.zeros((restart + 4, restart + 1)), rows * NS + slot)
+    return Multigrid3D(MGL, MGI, np.zeros((N, NS)), np.zeros((N, NS + 1), np.float32), np.zeros((3, N)), np.zeros((m, m)),
+                       np.zeros(m, np.int64), np.zeros((2 * (restart + 1), n)), np.zeros((restart + 4, restart + 1)),
+                       ell.astype(np.int32 if n * NS < 2**31 else np.int64))

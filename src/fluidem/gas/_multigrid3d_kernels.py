@@ -2,7 +2,9 @@
 box grid (optionally periodic along any axis): the 3D sibling of ``_multigrid_kernels.py``.
 
 ``mg_setup`` makes the hierarchy of a matrix given in CSC form (its entries mapped to grid rows by the
-caller, once per pattern: ``_multigrid3d.py``), ``gmres`` solves A x = b with one cycle (``mg_cycle``) as
+caller, once per pattern: ``_multigrid3d.py``) in one pass over the rows of each level (the smoother's
+copy, 1 / diagonal and the sums of the next level's matrix, whose targets follow from (i, j, k) inside
+the level's box; MGI is read on its faces only), ``gmres`` solves A x = b with one cycle (``mg_cycle``) as
 right preconditioner (the preconditioned vectors are kept, as flexible GMRES does). Nothing here knows the
 equations behind the matrix; the caller owns every array.
 
@@ -26,9 +28,9 @@ holds cells MGL[0, l] .. MGL[0, l + 1] - 1):
       Galerkin target of each of those 6 entries in MGA (flat index row * 7 + slot, slot 0 the diagonal;
       -1 none), and the coarse cell (local index) of this cell
   MGA (N, 7): matrix rows (diagonal, then the 6 neighbour coefficients)
-  MGS (N, 8) float32: the rows of MGA, then 1 / diagonal
-  MGW (4, N): x, b (coarse levels; the finest level works in GMRES's vectors), the cycle's visit count of
-      each level (first entries), 1 / diagonal
+  MGS (N, 8) float32: the rows of MGA, then 1 / diagonal (32 bytes a row)
+  MGW (3, N): x, b (coarse levels; the finest level works in GMRES's vectors), the cycle's visit count of
+      each level (first entries)
   DLU (m, m) + PIV (m): dense LU of the coarsest level, partial pivoting
   KRY (2 (restart + 1), n): GMRES basis V and preconditioned vectors Z
   HES (restart + 4, restart + 1): Hessenberg matrix, then rows of Givens cosines, sines, rhs
@@ -36,7 +38,7 @@ holds cells MGL[0, l] .. MGL[0, l + 1] - 1):
 import numpy as np
 from numba import njit
 
-MG_X, MG_B, MG_R, MG_IDIAG = 0, 1, 2, 3
+MG_X, MG_B, MG_R = 0, 1, 2
 MGI_NB, MGI_GAL, MGI_AGG = 0, 6, 12
 NS = 7  # slots of a matrix row
 SWEEPS = 2  # Gauss-Seidel sweeps before and after the coarse correction
@@ -44,24 +46,70 @@ CYCLES = 2  # cycles of the next coarser level per visit of a level: 1 a V-cycle
 
 
 @njit(cache=True, error_model="numpy")
-def _mg_level_matrix(MGL, MGI, MGA, MGW, l):
-    """Coarse matrix of level l + 1 from that of level l (also 1 / diagonal of level l + 1)."""
-    o0, o1, o2 = MGL[0, l], MGL[0, l + 1], MGL[0, l + 2]
+def _mg_level_pass(MGL, MGI, MGA, MGS, l):
+    """One pass over the rows of level l: their single-precision copies and 1 / diagonal (MGS) and, but
+    on the coarsest level, the sums of Pᵀ A P into the rows of level l + 1 (``_mg_coarse_rows`` scales
+    them). The Galerkin target of an entry (row g, neighbour d) is the diagonal of g's coarse cell where
+    the neighbour shares it, else that cell's entry d; inside the level's box it follows from (i, j, k)
+    and the aggregation factors, on the box's faces (wrap-arounds) from MGI. Returns False where a
+    diagonal is 0 (level 0) or its inverse is not finite (coarse levels)."""
+    levels = MGL.shape[1] - 1
+    o0, o1 = MGL[0, l], MGL[0, l + 1]
+    a, b, c = MGL[1, l], MGL[2, l], MGL[3, l]
+    last = l == levels - 1
     flat = MGA.reshape(MGA.size)
-    for g in range(o1, o2):
-        for s in range(NS):
-            MGA[g, s] = 0.0
-    for g in range(o0, o1):
-        flat[(o1 + MGI[g, MGI_AGG]) * NS] += MGA[g, 0]
-        for d in range(6):
-            t = MGI[g, MGI_GAL + d]
-            if t >= 0:
-                flat[t] += MGA[g, 1 + d]
+    rx, ry, rz, bc, cc = 1, 1, 1, 1, 1
+    if not last:
+        rx, ry, rz = MGL[4, l], MGL[5, l], MGL[6, l]
+        bc, cc = MGL[2, l + 1], MGL[3, l + 1]
+        for g in range(o1, MGL[0, l + 2]):
+            for s in range(NS):
+                MGA[g, s] = 0.0
+    for i in range(a):
+        edge_i = i == 0 or i == a - 1
+        mx, px = i % rx != 0, i % rx != rx - 1  # the -x / +x neighbour in the same coarse cell
+        for j in range(b):
+            edge_ij = edge_i or j == 0 or j == b - 1
+            my, py = j % ry != 0, j % ry != ry - 1
+            g0 = o0 + (i * b + j) * c
+            t0 = o1 + ((i // rx) * bc + j // ry) * cc
+            for k in range(c):
+                g = g0 + k
+                d = MGA[g, 0]
+                inv = 1.0 / d
+                if (d == 0.0) if l == 0 else not np.isfinite(inv):
+                    return False
+                for s in range(NS):
+                    MGS[g, s] = MGA[g, s]
+                MGS[g, NS] = inv
+                if last:
+                    continue
+                T = (t0 + k // rz) * NS
+                flat[T] += d
+                if edge_ij or k == 0 or k == c - 1:
+                    for e in range(6):
+                        t = MGI[g, MGI_GAL + e]
+                        if t >= 0:
+                            flat[t] += MGA[g, 1 + e]
+                else:
+                    mz, pz = k % rz != 0, k % rz != rz - 1
+                    flat[T if mx else T + 1] += MGA[g, 1]
+                    flat[T if px else T + 2] += MGA[g, 2]
+                    flat[T if my else T + 3] += MGA[g, 3]
+                    flat[T if py else T + 4] += MGA[g, 4]
+                    flat[T if mz else T + 5] += MGA[g, 5]
+                    flat[T if pz else T + 6] += MGA[g, 6]
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def _mg_coarse_rows(MGL, MGA, l):
+    """The rows of level l + 1 from their sums of Pᵀ A P (``_mg_level_pass`` of level l)."""
     # Pᵀ A P multiplies the coupling along an axis of a diffusion operator by that axis's aggregation
     # factor against its discretisation on the coarse grid (r_b r_c fine faces per coarse face, the ratio
     # area / distance r_b r_c / r_a); its row sums (the compressibility, the boundaries) are right:
     # divide the couplings, keep the row sums
-    for g in range(o1, o2):
+    for g in range(MGL[0, l + 1], MGL[0, l + 2]):
         rs = 0.0
         for s in range(NS):
             rs += MGA[g, s]
@@ -70,35 +118,25 @@ def _mg_level_matrix(MGL, MGI, MGA, MGW, l):
             MGA[g, 1 + d] /= MGL[4 + d // 2, l]
             off += MGA[g, 1 + d]
         MGA[g, 0] = rs - off
-        MGW[MG_IDIAG, g] = 1.0 / MGA[g, 0]
 
 
 @njit(cache=True, error_model="numpy")
 def mg_setup(data, csc_ell, MGL, MGI, MGA, MGS, MGW, DLU, PIV):
     """The multigrid hierarchy of the CSC matrix ``data`` (its entries go to MGA rows by ``csc_ell``: flat
-    index cell * 7 + slot), with the smoother's single-precision copy MGS; returns False if a diagonal or
-    the coarsest LU is singular."""
+    index cell * 7 + slot, each slot at most once; then the slots of level 0 that no entry fills, set to
+    0), with the smoother's single-precision copy MGS, one pass over the rows of each level; returns False
+    if a diagonal or the coarsest LU is singular."""
     levels = MGL.shape[1] - 1
-    n0 = MGL[0, 1]
     flat = MGA.reshape(MGA.size)
-    for g in range(n0):
-        for s in range(NS):
-            MGA[g, s] = 0.0
     for q in range(data.size):
-        flat[csc_ell[q]] += data[q]
-    for g in range(n0):
-        if MGA[g, 0] == 0.0:
+        flat[csc_ell[q]] = data[q]
+    for q in range(data.size, csc_ell.size):
+        flat[csc_ell[q]] = 0.0
+    for l in range(levels):
+        if not _mg_level_pass(MGL, MGI, MGA, MGS, l):
             return False
-        MGW[MG_IDIAG, g] = 1.0 / MGA[g, 0]
-    for l in range(levels - 1):
-        _mg_level_matrix(MGL, MGI, MGA, MGW, l)
-        for g in range(MGL[0, l + 1], MGL[0, l + 2]):
-            if not np.isfinite(MGW[MG_IDIAG, g]):
-                return False
-    for g in range(MGL[0, levels]):
-        for s in range(NS):
-            MGS[g, s] = MGA[g, s]
-        MGS[g, NS] = MGW[MG_IDIAG, g]
+        if l < levels - 1:
+            _mg_coarse_rows(MGL, MGA, l)
     oc = MGL[0, levels - 1]
     m = MGL[0, levels] - oc
     for i in range(m):

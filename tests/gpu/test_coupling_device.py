@@ -84,6 +84,63 @@ def test_centroid_deposit_matches_cpu(by_volume):
     _sum_close(wvy, gy)
 
 
+def _discs(seed=7, n=60):
+    """Discs of radius 0.8-6 mm on the 4 × 6 grid of 10 × 15 mm cells (up to 0.6 of a cell: across one face, two
+    faces, a corner, several cells), centres a little beyond the grid (discs cut by its sides), some centres on
+    faces and corners."""
+    rng = np.random.default_rng(seed)
+    pos, vel, _, _, _ = _system(seed, n)
+    radius = rng.uniform(0.8e-3, 6e-3, n)
+    pos[3:6, 0] = [DX, 2 * DX, 3 * DX]  # centres on corners
+    pos[3:6, 1] = [DY, 3 * DY, 0.0]
+    volume = math.pi / 6.0 * (2.0 * radius) ** 3
+    return pos, vel, radius, volume
+
+
+@pytest.mark.parametrize("method", ["area", "area_volume"])
+@pytest.mark.parametrize("by_volume", [False, True])
+def test_area_deposit_matches_cpu(method, by_volume):
+    """The exact disc areas of each particle in every cell it overlaps (Hoomans 1996 §3.4; 'area_volume' its
+    volume shared by them), the velocity weights by number (the centres, eq. 50) or by share (Sun 2007 eq. 35),
+    parts outside the grid dropped: ``_voidage_cuda.area_deposit`` against ``_voidage_kernels.deposit_solids``."""
+    from fluidem.coupling import _voidage_cuda as VC
+
+    pos, vel, radius, volume = _discs()
+    frac, wsum, wvx, wvy = (np.empty((NX, NY)) for _ in range(4))
+    VK.deposit_solids(1 if method == "area" else 2, 1 if by_volume else 0, pos, radius, volume, vel, DX, DY, 1.0,
+                      frac, wsum, wvx, wvy)
+    cells = _dev(*(np.zeros((NX, NY)) for _ in range(4)))
+    d_pos, d_vel, d_rad, d_vol = _dev(pos, vel, radius, volume)
+    VC.area_deposit[1, VC.THREADS](d_pos, d_vel, d_rad, d_vol, method == "area_volume", DX, DY, by_volume, *cells)
+    solids, count, gx, gy = (c.copy_to_host() for c in cells)
+    inside = (frac.sum() < (np.pi * radius**2 if method == "area" else volume).sum() * (1.0 - 1e-3))
+    assert inside  # some disc area lies outside the grid, and is dropped on both sides
+    _sum_close(frac, solids)
+    _sum_close(wsum, solids if by_volume else count)
+    _sum_close(wvx, gx)
+    _sum_close(wvy, gy)
+
+
+def test_sauter_deposit_matches_cpu():
+    """Σ V_p/d_p and Σ V_p of the centres in each cell, finished on the host into 1/D̄ (DEM book 2012 two-phase
+    chapter, eq. 10): ``_voidage_cuda.sauter_deposit`` and ``exchange_gpu.sauter_finish`` against
+    ``_voidage_kernels.sauter_inverse``; an empty cell takes the bed's value."""
+    from fluidem.coupling import _voidage_cuda as VC
+    from fluidem.coupling.exchange_gpu import sauter_finish
+
+    pos, _, radius, volume = _discs(seed=3, n=20)
+    expected = np.empty((NX, NY))
+    bed = VK.sauter_inverse(pos, radius, volume, DX, DY, expected)
+    sums = _dev(np.zeros((NX, NY)), np.zeros((NX, NY)))
+    d_pos, d_rad, d_vol = _dev(pos, radius, volume)
+    VC.sauter_deposit[1, VC.THREADS](d_pos, d_rad, d_vol, 1.0 / DX, 1.0 / DY, *sums)
+    got = np.empty((NX, NY))
+    by_size, by_volume = (a.copy_to_host() for a in sums)
+    assert np.any(by_volume == 0.0)  # empty cells: the bed's value
+    assert abs(sauter_finish(by_size, by_volume, got) - bed) <= PER_PARTICLE_RTOL * bed
+    assert np.all(np.abs(got - expected) <= SUM_RTOL * np.abs(expected).max())
+
+
 def _cpu_deposit(law, pos, vel, radius, volume, gas, px, py, fold, solids):
     vu = np.full((NX + 1, NY), 1.5 * DX * DY * 4e-3)
     vv = np.full((NX, NY + 1), 1.5 * DX * DY * 4e-3)
@@ -159,3 +216,56 @@ def test_particle_forces_match_cpu(split, pressure, dim2):
     for cpu, dev in ((ext, d_ext), (damp, d_damp), (total, d_total)):
         got = dev.copy_to_host()
         assert np.all(np.abs(got - cpu) <= PER_PARTICLE_RTOL * np.abs(cpu).max())
+
+
+def _bed(packing_case, coupling, n=150, two_species=False):
+    """A 2D bed of n discs of 4 mm (3.6 mm with ``two_species``) on a 4 × 12 gas grid, gas from below, walls
+    left and right, the coupling section ``coupling``."""
+    case, _ = packing_case("linear_spring_dashpot", n=n, dimensions=2, speed=0.2, two_species=two_species)
+    data = case.model_dump()
+    width, height, depth = data["walls"][0]["upper"]
+    data["walls"][0]["upper"] = [width, 3 * height, depth]
+    data["time"]["dt"] = 2e-5
+    data["gas"] = {"dt": 8e-5, "grid": {"cells": [4, 12], "size": [width, 3 * height], "depth": depth},
+                   "boundaries": {"bottom": {"kind": "inflow", "superficial": 1.5}, "top": {"kind": "pressure_outlet"},
+                                  "left": {"kind": "wall"}, "right": {"kind": "wall"}}}
+    data["coupling"] = {"drag": "gidaspow", **coupling}
+    return data, 3 * height
+
+
+COUPLED_OPTIONS = {
+    "area": ({"voidage": {"method": "area", "to_3d": True}}, False),
+    "area_volume": ({"voidage": {"method": "area_volume", "velocity_weighting": "volume"}}, False),
+}
+
+
+@pytest.mark.parametrize("option", list(COUPLED_OPTIONS))
+def test_coupled_run_device_matches_host(packing_case, option):
+    """The GPU engine with the coupling's particle side on the device (``gpu_exchange = "device"``) against the
+    same run with it on the host ("host"), for each option the device took over: over three gas steps of four
+    sub-steps the particles and the gas agree to round-off (``test_gpu_engine.test_coupled_run_matches_cpu``'s
+    bounds, 1e-9: cell sums in another order, amplified by the contacts)."""
+    from fluidem import Simulation
+    from fluidem.case import validate_case
+
+    coupling, two_species = COUPLED_OPTIONS[option]
+    data, height = _bed(packing_case, coupling, two_species=two_species)
+    runs = {}
+    for mode in ("device", "host"):
+        data["coupling"]["gpu_exchange"] = mode
+        sim = Simulation(validate_case({**data, "device": "gpu"}))
+        assert type(sim.engine).__name__ == "SoftSphereGPUEngine"
+        sim.advance(3 * sim.gas.substeps)
+        runs[mode] = sim
+    dev, host = runs["device"], runs["host"]
+    assert dev.gas._device is not None and host.gas._device is None
+    assert dev.gas.substeps == host.gas.substeps == 4 and dev.gas.gas_steps == 3
+    assert np.abs(dev.state.position - host.state.position).max() <= 1e-9 * height
+    for a, b in ((dev.state.velocity, host.state.velocity), (dev.engine.ext_force, host.engine.ext_force)):
+        assert np.abs(a - b).max() <= 1e-9 * np.abs(b).max()
+    assert np.abs(host.engine.ext_force[:, 1]).max() > 0.1 * host.state.mass.max() * 9.81  # the gas carries weight
+    for k in ("p", "u", "v", "voidage"):
+        b = getattr(host.gas.state, k)
+        assert np.abs(getattr(dev.gas.state, k) - b).max() <= 1e-9 * np.abs(b).max(), k
+    assert np.abs(dev.gas.last_map.voidage - host.gas.last_map.voidage).max() <= SUM_RTOL
+    assert dev.gas.last_map.voidage.min() < 0.9  # a bed, not a few grains

@@ -28,13 +28,26 @@ def refusals(coupling, dimensions: int = 2) -> list[str]:
         out.append("coupling.gpu_exchange = 'host'")
     if coupling.exchange != "particle":
         out.append(f"coupling.momentum_exchange = {coupling.exchange!r} (the device runs 'particle')")
-    if dimensions == 2 and coupling.mapping.method != "centroid":
-        out.append(f"coupling.voidage.method = {coupling.mapping.method!r} (the device deposits by centre: "
-                   "'centroid')")
+    if dimensions == 2 and coupling.mapping.method not in ("centroid", "area", "area_volume"):
+        out.append(f"coupling.voidage.method = {coupling.mapping.method!r} (the device maps 'centroid', 'area' and "
+                   "'area_volume' on a 2D grid)")
     if coupling.polydisperse != "none":
         out.append(f"coupling.polydisperse = {coupling.polydisperse!r} (the cells' Sauter mean diameter is mapped "
                    "on the host)")
     return out
+
+
+def sauter_finish(by_size, by_volume, out) -> float:
+    """out ← 1/D̄ [1/m] of each cell from the device's sums (``_voidage_cuda.sauter_deposit``): Σ V_p/d_p / Σ V_p
+    (DEM book 2012 two-phase chapter, eq. 10), a cell without particles taking the bed's value, as
+    ``_voidage_kernels.sauter_inverse`` (and ``_voidage3d_kernels.sauter_inverse3d``) finish theirs; returns 1/D̄
+    of the bed (0 without particles). by_size, by_volume, out : the grid's cell shape."""
+    total_v = float(by_volume.sum())
+    bed = float(by_size.sum()) / total_v if total_v > 0.0 else 0.0
+    full = by_volume > 0.0
+    np.divide(by_size, by_volume, out=out, where=full)
+    out[~full] = bed
+    return bed
 
 
 def device_exchange(coupling):
@@ -111,8 +124,9 @@ class DeviceExchange:
 
     # ------------------------------------------------------------ stages
     def map(self, mapping, grid) -> SolidsMap:
-        """particles → grid (``VoidageMapping.map_particles`` with method 'centroid'): the deposit on the device,
-        the rest on the host (``_voidage_kernels.finish_map``)."""
+        """particles → grid (``VoidageMapping.map_particles``, method 'centroid', 'area' or 'area_volume'): the
+        deposit on the device (``_voidage_cuda.centroid_deposit``, ``area_deposit``), the rest on the host
+        (``_voidage_kernels.finish_map``)."""
         shape = grid.shape
         eps, su, sv = np.empty(shape), np.empty(shape), np.empty(shape)
         solids, count, wvx, wvy = self._host_cells
@@ -122,16 +136,22 @@ class DeviceExchange:
                 self._zero(a)
             threads = self._vc.THREADS
             by_volume = mapping.velocity_weighting == "volume"
-            self._vc.centroid_deposit[self._blocks(threads), threads](
-                d["position"], d["velocity"], self._volume(), 1.0 / grid.dx, 1.0 / grid.dy, by_volume, *self._cells)
+            if mapping.method == "centroid":
+                self._vc.centroid_deposit[self._blocks(threads), threads](
+                    d["position"], d["velocity"], self._volume(), 1.0 / grid.dx, 1.0 / grid.dy, by_volume,
+                    *self._cells)
+            else:  # exact disc areas (Hoomans 1996 §3.4), 'area_volume' sharing V_p by them
+                self._vc.area_deposit[self._blocks(threads), threads](
+                    d["position"], d["velocity"], d["radius"], self._volume(), mapping.method == "area_volume",
+                    float(grid.dx), float(grid.dy), by_volume, *self._cells)
             for dev, host in zip(self._cells, self._host_cells):
                 dev.copy_to_host(host)
         else:
             for a in self._host_cells:
                 a[...] = 0.0
             by_volume = False
-        # as ``_voidage_kernels.deposit_solids``: the fraction over V_cell; the velocity weights are the counts
-        # (Hoomans 1996 eq. 50) or the volumes (Sun 2007 eq. 35)
+        # as ``_voidage_kernels.deposit_solids``: the fraction over V_cell (dx dy for 'area'); the velocity weights
+        # are the counts (Hoomans 1996 eq. 50) or the deposit (Sun 2007 eq. 35)
         wsum = solids.copy() if by_volume else count
         frac = solids / V._norm(grid, mapping.method)
         w = mapping.smoothing_width

@@ -141,7 +141,7 @@ def test_sauter_deposit_matches_cpu():
     assert np.all(np.abs(got - expected) <= SUM_RTOL * np.abs(expected).max())
 
 
-def _cpu_deposit(law, pos, vel, radius, volume, gas, px, py, fold, solids):
+def _cpu_deposit(law, pos, vel, radius, volume, gas, px, py, fold, solids, inv_dbar=None):
     vu = np.full((NX + 1, NY), 1.5 * DX * DY * 4e-3)
     vv = np.full((NX, NY + 1), 1.5 * DX * DY * 4e-3)
     out = {k: np.zeros(s) for k, s in (("AU", vu.shape), ("BU", vu.shape), ("AV", vv.shape), ("BV", vv.shape),
@@ -150,30 +150,37 @@ def _cpu_deposit(law, pos, vel, radius, volume, gas, px, py, fold, solids):
     eu, ev = (np.zeros(vu.shape), np.zeros(vv.shape)) if solids else (np.zeros((0, 0)), np.zeros((0, 0)))
     kp = np.zeros(pos.shape[0])
     bad = P.deposit(law, pos, vel, radius, volume, gas["u"], gas["v"], gas["voidage"], gas["rho"], MU,
-                    np.zeros((0, 0)), DX, DY, 0.3, px, py, kp, out["AU"], out["BU"], out["AV"], out["BV"], out["KC"],
+                    np.zeros((0, 0)) if inv_dbar is None else inv_dbar, DX, DY, 0.3, px, py, kp, out["AU"], out["BU"], out["AV"], out["BV"], out["KC"],
                     DX * DY * 4e-3, vu, vv, out["bu"], out["su"], out["bv"], out["sv"], fold, eu, ev)
     # the pressure voidage before its last step (1 − E/V_f, clipped): the deposited E
     return kp, out, (eu, ev, vu, vv), bad
 
 
 @pytest.mark.parametrize("law_name", drag_laws.names())
-@pytest.mark.parametrize("px,fold,solids", [(False, True, True), (True, False, True), (False, True, False)])
-def test_deposit_matches_cpu(law_name, px, fold, solids):
+@pytest.mark.parametrize("px,fold,solids,mixture", [(False, True, True, False), (True, False, True, False),
+                                                     (False, True, False, False), (False, True, True, True)])
+def test_deposit_matches_cpu(law_name, px, fold, solids, mixture):
     """K_p of each particle (every registered drag law), the face sums A_f, B_f, Σ K_p per cell and the particle
     volume on the faces of the pressure term, against ``_paired_kernels.deposit``; out-of-range particles
-    counted and given NaN as there."""
+    counted and given NaN as there. ``mixture``: the polydisperse drag, y = d/D̄ with 1/D̄ of the cells
+    interpolated to the particle (DEM book 2012 eqs 10-12)."""
     from fluidem.coupling import _paired_cuda as PC
 
     pos, vel, radius, volume, gas = _system()
     law = drag_laws.get(law_name)().pack()
-    kp, out, (eu, ev, vu, vv), bad = _cpu_deposit(law, pos, vel, radius, volume, gas, px, False, fold, solids)
+    inv_dbar = np.random.default_rng(4).uniform(300.0, 700.0, (NX, NY)) if mixture else np.zeros((0, 0))
+    kp, out, (eu, ev, vu, vv), bad = _cpu_deposit(law, pos, vel, radius, volume, gas, px, False, fold, solids,
+                                                  inv_dbar)
     assert 0 < bad < pos.shape[0] // 4
+    if mixture:  # y ≠ 1 changes K_p (a law without a size correction excepted)
+        mono = _cpu_deposit(law, pos, vel, radius, volume, gas, px, False, fold, solids)[0]
+        assert not np.allclose(kp[~np.isnan(kp)], mono[~np.isnan(mono)], rtol=1e-3) or "total" in law_name
     sums = {k: np.zeros(s) for k, s in (("AU", vu.shape), ("BU", vu.shape), ("AV", vv.shape), ("BV", vv.shape),
                                         ("KC", (NX, NY)), ("EU", vu.shape), ("EV", vv.shape))}
     dsums = dict(zip(sums, _dev(*sums.values())))
     d_kp, d_bad = _dev(np.zeros(pos.shape[0]), np.zeros(1, dtype=np.int32))
     args = _dev(law, pos, vel, radius, volume, gas["u"], gas["v"], gas["voidage"], gas["rho"])
-    PC.deposit[1, PC.THREADS](*args, MU, DX, DY, 0.3, px, False, fold, d_kp, dsums["AU"], dsums["BU"], dsums["AV"],
+    PC.deposit[1, PC.THREADS](*args, MU, *_dev(inv_dbar), DX, DY, 0.3, px, False, fold, d_kp, dsums["AU"], dsums["BU"], dsums["AV"],
                               dsums["BV"], dsums["KC"], solids, dsums["EU"], dsums["EV"], d_bad)
     got = {k: a.copy_to_host() for k, a in dsums.items()}
     assert int(d_bad.copy_to_host()[0]) == bad
@@ -236,6 +243,7 @@ def _bed(packing_case, coupling, n=150, two_species=False):
 COUPLED_OPTIONS = {
     "area": ({"voidage": {"method": "area", "to_3d": True}}, False),
     "area_volume": ({"voidage": {"method": "area_volume", "velocity_weighting": "volume"}}, False),
+    "sauter_y2": ({"polydisperse": "sauter_y2"}, True),
 }
 
 
@@ -268,4 +276,9 @@ def test_coupled_run_device_matches_host(packing_case, option):
         b = getattr(host.gas.state, k)
         assert np.abs(getattr(dev.gas.state, k) - b).max() <= 1e-9 * np.abs(b).max(), k
     assert np.abs(dev.gas.last_map.voidage - host.gas.last_map.voidage).max() <= SUM_RTOL
+    if two_species:  # the polydisperse drag's 1/D̄ per cell of the last map, sizes 4 and 3.6 mm
+        inv = host.gas._inv_dbar
+        assert inv.shape == (4, 12) and 1 / 4e-3 < inv.max() <= 1 / 3.6e-3 * (1.0 + 1e-12)
+        assert inv.min() >= 1 / 4e-3 * (1.0 - 1e-12) and np.any((inv > 250.001) & (inv < 277.7))  # mixed cells
+        assert np.abs(dev.gas._inv_dbar - inv).max() <= SUM_RTOL * inv.max()
     assert dev.gas.last_map.voidage.min() < 0.9  # a bed, not a few grains

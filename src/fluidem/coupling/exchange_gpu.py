@@ -31,9 +31,6 @@ def refusals(coupling, dimensions: int = 2) -> list[str]:
     if dimensions == 2 and coupling.mapping.method not in ("centroid", "area", "area_volume"):
         out.append(f"coupling.voidage.method = {coupling.mapping.method!r} (the device maps 'centroid', 'area' and "
                    "'area_volume' on a 2D grid)")
-    if coupling.polydisperse != "none":
-        out.append(f"coupling.polydisperse = {coupling.polydisperse!r} (the cells' Sauter mean diameter is mapped "
-                   "on the host)")
     return out
 
 
@@ -83,6 +80,11 @@ class DeviceExchange:
         self.kp = cuda.to_device(np.zeros(max(self.n, 1)))
         self.bad = cuda.to_device(np.zeros(1, dtype=np.int32))
         self._grid_arrays(gd)
+        # the polydisperse drag's 1/D̄ per cell ((0, 0) or (0, 0, 0) for none) and the device's sums for it
+        self._mixture = coupling._inv_dbar.shape[0] > 0
+        self.inv_dbar = cuda.to_device(np.zeros(coupling._inv_dbar.shape))
+        self._sauter_sums = tuple(cuda.device_array(gd.shape) for _ in range(2)) if self._mixture else ()
+        self._host_sauter = tuple(np.empty(gd.shape) for _ in self._sauter_sums)
 
     @staticmethod
     def _kernel_modules():
@@ -118,6 +120,35 @@ class DeviceExchange:
             self._volume_of = vol
         return self.volume
 
+    def _sauter(self, grid) -> None:
+        """coupling._inv_dbar ← 1/D̄ of each cell at the current particles (``voidage.sauter_inverse``): the sums on
+        the device (``_voidage_cuda.sauter_deposit``, ``_voidage3d_cuda.sauter_deposit3d``), the ratio on the host
+        (``sauter_finish``)."""
+        if self.n:
+            d = self.engine.device_arrays()
+            for a in self._sauter_sums:
+                self._zero(a)
+            threads = self._vc.THREADS
+            if grid.dimensions == 3:
+                kernel, inv = self._vc.sauter_deposit3d, (1.0 / grid.dx, 1.0 / grid.dy, 1.0 / grid.dz)
+            else:
+                kernel, inv = self._vc.sauter_deposit, (1.0 / grid.dx, 1.0 / grid.dy)
+            kernel[self._blocks(threads), threads](d["position"], d["radius"], self._volume(), *inv,
+                                                   *self._sauter_sums)
+            for dev, host in zip(self._sauter_sums, self._host_sauter):
+                dev.copy_to_host(host)
+        else:
+            for a in self._host_sauter:
+                a[...] = 0.0
+        sauter_finish(*self._host_sauter, self.coupling._inv_dbar)
+
+    def _send_inv_dbar(self):
+        """The coupling's 1/D̄ per cell on the device (for ``deposit``), or the empty array of a monodisperse
+        drag."""
+        if self._mixture:
+            self.inv_dbar.copy_to_device(np.ascontiguousarray(self.coupling._inv_dbar, dtype=float))
+        return self.inv_dbar
+
     def _send(self, **fields) -> None:
         for k, a in fields.items():
             self._gas[k].copy_to_device(np.ascontiguousarray(a, dtype=float))
@@ -152,6 +183,8 @@ class DeviceExchange:
             by_volume = False
         # as ``_voidage_kernels.deposit_solids``: the fraction over V_cell (dx dy for 'area'); the velocity weights
         # are the counts (Hoomans 1996 eq. 50) or the deposit (Sun 2007 eq. 35)
+        if self._mixture:  # the polydisperse drag's 1/D̄ of this map (GasCoupling._map)
+            self._sauter(grid)
         wsum = solids.copy() if by_volume else count
         frac = solids / V._norm(grid, mapping.method)
         w = mapping.smoothing_width
@@ -175,7 +208,7 @@ class DeviceExchange:
             g, threads = self._gas, self._pc.THREADS
             self._pc.deposit[self._blocks(threads), threads](
                 self.law, d["position"], d["velocity"], d["radius"], self._volume(), g["u"], g["v"], g["voidage"],
-                g["rho"], float(cp.solver.props.viscosity), float(gd.dx), float(gd.dy),
+                g["rho"], float(cp.solver.props.viscosity), self._send_inv_dbar(), float(gd.dx), float(gd.dy),
                 float(cp.mapping.minimum_voidage), *cp._periodic, bool(cp._fold), self.kp, s["AU"], s["BU"], s["AV"],
                 s["BV"], s["KC"], solids, s["EU"], s["EV"], self.bad)
         au, bu, av, bv = cp._faces

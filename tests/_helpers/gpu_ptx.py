@@ -38,8 +38,11 @@ def coupling_signatures(VC, PC, T) -> dict:
     b, f = T.boolean, T.float64
     return {
         VC.centroid_deposit: (f2, f2, f1, f, f, b, f2, f2, f2, f2),
+        VC.area_deposit: (f2, f2, f1, f1, b, f, f, b, f2, f2, f2, f2),
+        VC.sauter_deposit: (f2, f1, f1, f, f, f2, f2),
         VC.zero: (f2,),
-        PC.deposit: (f1, f2, f2, f1, f1, f2, f2, f2, f2, f, f, f, f, b, b, b, f1, f2, f2, f2, f2, f2, b, f2, f2, i1),
+        PC.deposit: (f1, f2, f2, f1, f1, f2, f2, f2, f2, f, f2, f, f, f, b, b, b, f1, f2, f2, f2, f2, f2, b, f2, f2,
+                     i1),
         PC.forces_split: (f2, f2, f1, f1, f2, f2, f2, f, f, b, b, b, b, b, f2, f1, f2),
         PC.forces: (f2, f2, f1, f1, f2, f2, f2, f, f, b, b, b, b, b, f2, f2),
     }
@@ -53,8 +56,9 @@ def coupling3d_signatures(VC3, PC3, T) -> dict:
     return {
         VC3.centroid_deposit3d: (f2, f2, f1, f, f, f, b) + (f3,) * 5,
         VC3.volume_deposit3d: (f2, f2, f1) + (f,) * 6 + (b,) * 4 + (f3,) * 5,
+        VC3.sauter_deposit3d: (f2, f1, f1, f, f, f, f3, f3),
         VC3.zero3: (f3,),
-        PC3.deposit3d: (f1, f2, f2, f1, f1) + (f3,) * 5 + (f,) * 5 + (b,) * 4 + (f1,) + (f3,) * 7 + (b,) + (f3,) * 3
+        PC3.deposit3d: (f1, f2, f2, f1, f1) + (f3,) * 5 + (f, f3) + (f,) * 4 + (b,) * 4 + (f1,) + (f3,) * 7 + (b,) + (f3,) * 3
         + (i1,),
         PC3.forces_split3d: (f2, f2, f1, f1) + (f3,) * 4 + (f,) * 3 + (b,) * 5 + (f2, f1, f2),
         PC3.forces3d: (f2, f2, f1, f1) + (f3,) * 4 + (f,) * 3 + (b,) * 5 + (f2, f2),

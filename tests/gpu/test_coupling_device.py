@@ -225,6 +225,79 @@ def test_particle_forces_match_cpu(split, pressure, dim2):
         assert np.all(np.abs(got - cpu) <= PER_PARTICLE_RTOL * np.abs(cpu).max())
 
 
+@pytest.mark.parametrize("mixture", [False, True])
+def test_cell_beta_deposit_matches_cpu(mixture):
+    """Σ β/(1 − ε) V_p of the particles centred in each cell over V_cell, β/(1 − ε) at the cell's ε, gas density
+    and slip (Sun 2007 eq. 33; with ``mixture`` y = d/D̄ of the cell): ``_cell_cuda.cell_beta_deposit`` against
+    ``_exchange_kernels.cell_beta``, out-of-range particles counted and left out as there."""
+    from fluidem.coupling import _cell_cuda as CC
+    from fluidem.coupling import _exchange_kernels as EK
+
+    pos, vel, radius, volume, gas = _system()
+    rng = np.random.default_rng(8)
+    su, sv = rng.normal(0.0, 0.3, (NX, NY)), rng.normal(0.0, 0.3, (NX, NY))
+    inv_dbar = rng.uniform(300.0, 700.0, (NX, NY)) if mixture else np.zeros((0, 0))
+    law = drag_laws.get("beetstra")().pack()
+    beta = np.empty((NX, NY))
+    vc = DX * DY * 4e-3
+    bad = EK.cell_beta(law, pos, radius, volume, gas["u"], gas["v"], gas["rho"], gas["voidage"], su, sv, MU, inv_dbar,
+                       DX, DY, vc, beta)
+    assert 0 < bad < pos.shape[0] // 4
+    d_out, d_bad = _dev(np.zeros((NX, NY)), np.zeros(1, dtype=np.int32))
+    args = _dev(law, pos, radius, volume, gas["u"], gas["v"], gas["rho"], gas["voidage"], su, sv)
+    CC.cell_beta_deposit[1, CC.THREADS](*args, MU, *_dev(inv_dbar), DX, DY, d_out, d_bad)
+    assert int(d_bad.copy_to_host()[0]) == bad
+    _sum_close(beta, d_out.copy_to_host() / vc)
+
+
+@pytest.mark.parametrize("px", [False, True])
+def test_pressure_deposit_matches_cpu(px):
+    """The particle volume on the faces of each particle's folded ∇p interpolation, finished into the pressure
+    voidage 1 − Σ w V_p / V_f (clipped): ``_cell_cuda.pressure_deposit`` against
+    ``_paired_kernels.pressure_voidage``."""
+    from fluidem.coupling import _cell_cuda as CC
+
+    pos, _, _, volume, _ = _system()
+    volume = volume * 30.0  # faces filled past the clipping, some
+    vu = np.full((NX + 1, NY), 1.5 * DX * DY * 4e-3)
+    vv = np.full((NX, NY + 1), 1.5 * DX * DY * 4e-3)
+    eu, ev = np.empty(vu.shape), np.empty(vv.shape)
+    P.pressure_voidage(pos, volume, DX, DY, px, False, vu, vv, 0.3, eu, ev)
+    assert eu.min() == 0.3 and np.any((eu > 0.3) & (eu < 1.0))  # clipped faces and others
+    d_eu, d_ev = _dev(np.zeros(vu.shape), np.zeros(vv.shape))
+    CC.pressure_deposit[1, CC.THREADS](*_dev(pos, volume), DX, DY, px, False, d_eu, d_ev)
+    for cpu, dev, vf in ((eu, d_eu, vu), (ev, d_ev, vv)):
+        got = dev.copy_to_host()
+        P._face_voidage(got, vf, 0.3)
+        _sum_close(cpu, got)
+
+
+@pytest.mark.parametrize("pressure,px", [(True, False), (True, True), (False, False)])
+def test_cell_forces_match_cpu(pressure, px):
+    """Each particle's share V_p/Σ V_r of its cell's drag β V_c (u_c − u_s,c), minus V_p ∇p, the engine's total
+    following: ``_cell_cuda.cell_solids`` and ``forces`` against ``_paired_kernels.cell_forces``."""
+    from fluidem.coupling import _cell_cuda as CC
+
+    pos, vel, radius, volume, gas = _system(seed=5)
+    rng = np.random.default_rng(9)
+    beta, su, sv = rng.uniform(0.0, 3e4, (NX, NY)), rng.normal(0.0, 0.3, (NX, NY)), rng.normal(0.0, 0.3, (NX, NY))
+    ext, total = rng.normal(size=(pos.shape[0], 3)), rng.normal(size=(pos.shape[0], 3))
+    d_ext, d_total = _dev(ext, total)
+    vc = DX * DY * 4e-3
+    P.cell_forces(pos, vel, volume, beta, su, sv, gas["u"], gas["v"], gas["p"], DX, DY, vc, px, False, pressure, True,
+                  ext, total)
+    d_pos, d_vol, d_solids = _dev(pos, volume, np.zeros((NX, NY)))
+    CC.cell_solids[1, CC.THREADS](d_pos, d_vol, DX, DY, d_solids)
+    _sum_close(np.bincount(np.minimum(np.maximum((pos[:, 0] / DX).astype(int), 0), NX - 1) * NY
+                           + np.minimum(np.maximum((pos[:, 1] / DY).astype(int), 0), NY - 1), volume,
+                           minlength=NX * NY).reshape(NX, NY), d_solids.copy_to_host())
+    CC.forces[1, CC.THREADS](d_pos, d_vol, d_solids, *_dev(beta, su, sv, gas["u"], gas["v"], gas["p"]), DX, DY, vc,
+                             px, False, pressure, d_ext, d_total)
+    for cpu, dev in ((ext, d_ext), (total, d_total)):
+        got = dev.copy_to_host()
+        assert np.all(np.abs(got - cpu) <= PER_PARTICLE_RTOL * np.abs(cpu).max())
+
+
 def _bed(packing_case, coupling, n=150, two_species=False):
     """A 2D bed of n discs of 4 mm (3.6 mm with ``two_species``) on a 4 × 12 gas grid, gas from below, walls
     left and right, the coupling section ``coupling``."""
@@ -244,6 +317,7 @@ COUPLED_OPTIONS = {
     "area": ({"voidage": {"method": "area", "to_3d": True}}, False),
     "area_volume": ({"voidage": {"method": "area_volume", "velocity_weighting": "volume"}}, False),
     "sauter_y2": ({"polydisperse": "sauter_y2"}, True),
+    "cell": ({"momentum_exchange": "cell"}, False),
 }
 
 

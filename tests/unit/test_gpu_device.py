@@ -140,8 +140,9 @@ def test_coupling_options_the_device_exchange_lacks_keep_it_on_the_host():
                                                      "coupling.voidage.smoothing_width": 0.01}))) == []
     assert refusals(coupling(load_case("tsuji-jet", {"coupling.gpu_exchange": "host"}))) == [
         "coupling.gpu_exchange = 'host'"]
-    sun = refusals(coupling(load_case("goldschmidt-sun-method")))
-    assert sun == ["coupling.momentum_exchange = 'cell' (the device runs 'particle')"]
+    assert refusals(coupling(load_case("goldschmidt-sun-method"))) == []  # the "cell" exchange on the device too
+    assert refusals(coupling(load_case("tsuji-jet", {"coupling.momentum_exchange": "cell_beta"}))) == [
+        "coupling.momentum_exchange = 'cell_beta' (the device runs 'particle' and 'cell')"]
     for method in ("area", "area_volume"):  # the exact disc areas of Hoomans 1996 §3.4 on the device too
         assert refusals(coupling(load_case("tsuji-jet", {"coupling.voidage.method": method}))) == []
     assert refusals(coupling(load_case("bubbling-pseudo2d"))) == []

@@ -26,8 +26,9 @@ def refusals(coupling, dimensions: int = 2) -> list[str]:
     opts, out = coupling.options, []
     if opts.gpu_exchange == "host":
         out.append("coupling.gpu_exchange = 'host'")
-    if coupling.exchange != "particle":
-        out.append(f"coupling.momentum_exchange = {coupling.exchange!r} (the device runs 'particle')")
+    if coupling.exchange not in ("particle", "cell") or (dimensions == 3 and coupling.exchange != "particle"):
+        runs = "'particle'" if dimensions == 3 else "'particle' and 'cell'"
+        out.append(f"coupling.momentum_exchange = {coupling.exchange!r} (the device runs {runs})")
     if dimensions == 2 and coupling.mapping.method not in ("centroid", "area", "area_volume"):
         out.append(f"coupling.voidage.method = {coupling.mapping.method!r} (the device maps 'centroid', 'area' and "
                    "'area_volume' on a 2D grid)")
@@ -85,6 +86,10 @@ class DeviceExchange:
         self.inv_dbar = cuda.to_device(np.zeros(coupling._inv_dbar.shape))
         self._sauter_sums = tuple(cuda.device_array(gd.shape) for _ in range(2)) if self._mixture else ()
         self._host_sauter = tuple(np.empty(gd.shape) for _ in self._sauter_sums)
+        # the "cell" exchange: Σ β/(1 − ε) V_p, Σ V_p by ``_cell``, and the cell β, u_s, v_s the forces share
+        self._cellx = {k: cuda.device_array(gd.shape) for k in ("sum", "solids", "beta", "su", "sv")} \
+            if coupling.exchange == "cell" else {}
+        self.gas_law = cuda.to_device(np.ascontiguousarray(coupling._gas_law)) if self._cellx else None
 
     @staticmethod
     def _kernel_modules():
@@ -224,6 +229,70 @@ class DeviceExchange:
             P._face_voidage(eu, VU, cp.mapping.minimum_voidage)
             P._face_voidage(ev, VV, cp.mapping.minimum_voidage)
         return int(self.bad.copy_to_host()[0])
+
+    # ------------------------------------------------------------ the "cell" exchange
+    def cell_beta(self, voidage, solids_u, solids_v, out) -> int:
+        """out ← β per cell [kg m^-3 s^-1] of the "cell" exchange (``_exchange_kernels.cell_beta``, Sun 2007
+        eq. 33): Σ β/(1 − ε) V_p of each cell on the device (``_cell_cuda.cell_beta_deposit``), / V_cell on the
+        host; returns the number of particles whose drag arguments are out of range."""
+        from . import _cell_cuda as CC
+
+        cp, gd, gs, c = self.coupling, self.coupling.grid, self.coupling.state, self._cellx
+        self._zero(c["sum"])
+        self._zero_bad()
+        if self.n:
+            d = self.engine.device_arrays()
+            self._send(voidage=voidage, rho=gs.rho, u=gs.u, v=gs.v)
+            c["su"].copy_to_device(np.ascontiguousarray(solids_u, dtype=float))
+            c["sv"].copy_to_device(np.ascontiguousarray(solids_v, dtype=float))
+            g = self._gas
+            CC.cell_beta_deposit[self._blocks(CC.THREADS), CC.THREADS](
+                self.gas_law, d["position"], d["radius"], self._volume(), g["u"], g["v"], g["rho"], g["voidage"],
+                c["su"], c["sv"], float(cp.solver.props.viscosity), self._send_inv_dbar(), float(gd.dx),
+                float(gd.dy), c["sum"], self.bad)
+        c["sum"].copy_to_host(out)
+        out /= gd.cell_volume
+        return int(self.bad.copy_to_host()[0])
+
+    def pressure_voidage(self, eu, ev) -> None:
+        """eu, ev ← the pressure voidage of the "cell" exchange (``_paired_kernels.pressure_voidage``): the face
+        sums Σ w_pf V_p on the device (``_cell_cuda.pressure_deposit``), 1 − Σ/V_f clipped on the host."""
+        from . import _cell_cuda as CC
+
+        cp, gd, s = self.coupling, self.coupling.grid, self._sums
+        self._zero(s["EU"])
+        self._zero(s["EV"])
+        if self.n:
+            d = self.engine.device_arrays()
+            CC.pressure_deposit[self._blocks(CC.THREADS), CC.THREADS](
+                d["position"], self._volume(), float(gd.dx), float(gd.dy), *cp._periodic, s["EU"], s["EV"])
+        s["EU"].copy_to_host(eu)
+        s["EV"].copy_to_host(ev)
+        VU, VV = cp._face_volumes
+        P._face_voidage(eu, VU, cp.mapping.minimum_voidage)
+        P._face_voidage(ev, VV, cp.mapping.minimum_voidage)
+
+    def set_cell_forces(self, pressure: bool) -> None:
+        """The "cell" exchange's gas force on each particle into the engine's ``ext_force``, its total force
+        following (``_paired_kernels.cell_forces``): Σ V_p per cell (``_cell_cuda.cell_solids``), then each
+        particle's share of its cell's drag (``_cell_cuda.forces``); the cell β, u_s, v_s of the gas step cross
+        once."""
+        from . import _cell_cuda as CC
+
+        if self.n == 0:
+            return
+        cp, gd, gs, c = self.coupling, self.coupling.grid, self.coupling.state, self._cellx
+        d = self.engine.device_arrays()
+        for k, a in zip(("beta", "su", "sv"), cp._cell_inputs):
+            c[k].copy_to_device(np.ascontiguousarray(a, dtype=float))
+        self._send(u=gs.u, v=gs.v, p=gs.p)
+        self._zero(c["solids"])
+        blocks, threads, g = self._blocks(CC.THREADS), CC.THREADS, self._gas
+        CC.cell_solids[blocks, threads](d["position"], self._volume(), float(gd.dx), float(gd.dy), c["solids"])
+        CC.forces[blocks, threads](d["position"], self._volume(), c["solids"], c["beta"], c["su"], c["sv"], g["u"],
+                                   g["v"], g["p"], float(gd.dx), float(gd.dy), float(gd.cell_volume), *cp._periodic,
+                                   bool(pressure), d["ext_force"], d["force"])
+        self.engine.device_changed(("ext_force", "force"))
 
     def _zero_bad(self) -> None:
         self.bad.copy_to_device(np.zeros(1, dtype=np.int32))

@@ -2,9 +2,11 @@
 
 ``GasCoupling`` hands its per-particle stages to a ``DeviceExchange`` when the engine keeps its particles on
 the device (``SoftSphereGPUEngine``) and every option of the coupling has a device kernel (``refusals``):
-the voidage map's deposit (``_voidage_cuda``), each particle's drag coefficient and the face sums of the
-``particle`` exchange (``_paired_cuda.deposit``), and the gas force on each particle (``_paired_cuda.forces``,
-``forces_split``). Per gas step only cell and face arrays cross between host and device: the gas fields go
+the voidage map's deposit by centre or by exact disc areas and the cells' Sauter sums of a polydisperse drag
+(``_voidage_cuda``), each particle's drag coefficient and the face sums of the ``particle`` exchange
+(``_paired_cuda.deposit``), and the gas force on each particle (``_paired_cuda.forces``, ``forces_split``); for
+the ``cell`` exchange the cell β sums, the pressure voidage's face sums and each particle's share of its cell's
+drag (``_cell_cuda``). Per gas step only cell and face arrays cross between host and device: the gas fields go
 to the device, the deposited sums come back, and the host finishes them with the CPU's own kernels
 (``_voidage_kernels.finish_map``, ``_paired_kernels._face_coefficients``, ``_face_voidage``). K_p stays on the
 device; ``fetch_kp`` brings it to the host for checkpoints and ``exchange_balance``.

@@ -188,10 +188,10 @@ class DeviceExchange:
             for a in self._host_cells:
                 a[...] = 0.0
             by_volume = False
-        # as ``_voidage_kernels.deposit_solids``: the fraction over V_cell (dx dy for 'area'); the velocity weights
-        # are the counts (Hoomans 1996 eq. 50) or the deposit (Sun 2007 eq. 35)
         if self._mixture:  # the polydisperse drag's 1/D̄ of this map (GasCoupling._map)
             self._sauter(grid)
+        # as ``_voidage_kernels.deposit_solids``: the fraction over V_cell (dx dy for 'area'); the velocity weights
+        # are the counts (Hoomans 1996 eq. 50) or the deposit (Sun 2007 eq. 35)
         wsum = solids.copy() if by_volume else count
         frac = solids / V._norm(grid, mapping.method)
         w = mapping.smoothing_width

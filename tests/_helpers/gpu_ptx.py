@@ -38,10 +38,26 @@ def coupling_signatures(VC, PC, T) -> dict:
     b, f = T.boolean, T.float64
     return {
         VC.centroid_deposit: (f2, f2, f1, f, f, b, f2, f2, f2, f2),
+        VC.area_deposit: (f2, f2, f1, f1, b, f, f, b, f2, f2, f2, f2),
+        VC.sauter_deposit: (f2, f1, f1, f, f, f2, f2),
         VC.zero: (f2,),
-        PC.deposit: (f1, f2, f2, f1, f1, f2, f2, f2, f2, f, f, f, f, b, b, b, f1, f2, f2, f2, f2, f2, b, f2, f2, i1),
+        PC.deposit: (f1, f2, f2, f1, f1, f2, f2, f2, f2, f, f2, f, f, f, b, b, b, f1, f2, f2, f2, f2, f2, b, f2, f2,
+                     i1),
         PC.forces_split: (f2, f2, f1, f1, f2, f2, f2, f, f, b, b, b, b, b, f2, f1, f2),
         PC.forces: (f2, f2, f1, f1, f2, f2, f2, f, f, b, b, b, b, b, f2, f2),
+    }
+
+
+def cell_signatures(CC, T) -> dict:
+    """{kernel: argument types} of the 2D "cell" exchange's device kernels as ``coupling.exchange_gpu`` launches
+    them."""
+    f1, f2, i1 = T.float64[::1], T.float64[:, ::1], T.int32[::1]
+    b, f = T.boolean, T.float64
+    return {
+        CC.cell_beta_deposit: (f1, f2, f1, f1) + (f2,) * 6 + (f, f2, f, f, f2, i1),
+        CC.pressure_deposit: (f2, f1, f, f, b, b, f2, f2),
+        CC.cell_solids: (f2, f1, f, f, f2),
+        CC.forces: (f2, f1) + (f2,) * 7 + (f, f, f, b, b, b, f2, f2),
     }
 
 
@@ -53,9 +69,10 @@ def coupling3d_signatures(VC3, PC3, T) -> dict:
     return {
         VC3.centroid_deposit3d: (f2, f2, f1, f, f, f, b) + (f3,) * 5,
         VC3.volume_deposit3d: (f2, f2, f1) + (f,) * 6 + (b,) * 4 + (f3,) * 5,
+        VC3.sauter_deposit3d: (f2, f1, f1, f, f, f, f3, f3),
         VC3.zero3: (f3,),
-        PC3.deposit3d: (f1, f2, f2, f1, f1) + (f3,) * 5 + (f,) * 5 + (b,) * 4 + (f1,) + (f3,) * 7 + (b,) + (f3,) * 3
-        + (i1,),
+        PC3.deposit3d: (f1, f2, f2, f1, f1) + (f3,) * 5 + (f, f3) + (f,) * 4 + (b,) * 4 + (f1,) + (f3,) * 7 + (b,)
+        + (f3,) * 3 + (i1,),
         PC3.forces_split3d: (f2, f2, f1, f1) + (f3,) * 4 + (f,) * 3 + (b,) * 5 + (f2, f1, f2),
         PC3.forces3d: (f2, f2, f1, f1) + (f3,) * 4 + (f,) * 3 + (b,) * 5 + (f2, f2),
     }
@@ -74,9 +91,10 @@ def main(cc=(9, 0)) -> int:
     from fluidem.coupling import _voidage_cuda as VC
     from fluidem.coupling import _paired3d_cuda as PC3
     from fluidem.coupling import _voidage3d_cuda as VC3
+    from fluidem.coupling import _cell_cuda as CC
 
     for kernel, sig in {**kernel_signatures(SC, NC, T), **coupling_signatures(VC, PC, T),
-                        **coupling3d_signatures(VC3, PC3, T)}.items():
+                        **coupling3d_signatures(VC3, PC3, T), **cell_signatures(CC, T)}.items():
         ptx, _ = cuda.compile_ptx(kernel.py_func, sig, cc=cc)
         print(f"{kernel.py_func.__name__}: {len(ptx)} characters of PTX for sm_{cc[0]}{cc[1]}")
     return 0

@@ -124,7 +124,27 @@ def test_volume_deposit3d_matches_cpu(periodic, by_volume):
         _sum_close(cpu, dev)
 
 
-def _cpu_deposit(law, pos, vel, radius, volume, gas, periodic, fold, pair):
+def test_sauter_deposit3d_matches_cpu():
+    """Σ V_p/d_p and Σ V_p of the centres in each cell, finished on the host into 1/D̄ (DEM book 2012 two-phase
+    chapter, eq. 10): ``_voidage3d_cuda.sauter_deposit3d`` and ``exchange_gpu.sauter_finish`` against
+    ``_voidage3d_kernels.sauter_inverse3d``; an empty cell takes the bed's value."""
+    from fluidem.coupling import _voidage3d_cuda as VC
+    from fluidem.coupling.exchange_gpu import sauter_finish
+
+    pos, _, radius, volume, _ = _system(seed=3)
+    expected = np.empty(CELLS)
+    bed = VK3.sauter_inverse3d(pos, radius, volume, *SIZES, expected)
+    sums = _dev(np.zeros(CELLS), np.zeros(CELLS))
+    d_pos, d_rad, d_vol = _dev(pos, radius, volume)
+    VC.sauter_deposit3d[1, VC.THREADS](d_pos, d_rad, d_vol, *(1.0 / d for d in SIZES), *sums)
+    got = np.empty(CELLS)
+    by_size, by_volume = (a.copy_to_host() for a in sums)
+    assert np.any(by_volume == 0.0) and np.count_nonzero(by_volume) > 1  # empty cells: the bed's value
+    assert abs(sauter_finish(by_size, by_volume, got) - bed) <= PER_PARTICLE_RTOL * bed
+    assert np.all(np.abs(got - expected) <= SUM_RTOL * np.abs(expected).max())
+
+
+def _cpu_deposit(law, pos, vel, radius, volume, gas, periodic, fold, pair, inv_dbar=None):
     vf = face_volumes3d(CELLS, periodic, DX * DY * DZ)
     faces = [f.shape for f in vf]
     sums = {k: np.zeros(faces[a]) for a, ks in enumerate((("AU", "BU"), ("AV", "BV"), ("AW", "BW"))) for k in ks}
@@ -133,31 +153,38 @@ def _cpu_deposit(law, pos, vel, radius, volume, gas, periodic, fold, pair):
     eps = [np.zeros(s) for s in faces]
     kp = np.zeros(pos.shape[0])
     bad = P3.deposit3d(law, pos, vel, radius, volume, gas["u"], gas["v"], gas["w"], gas["voidage"], gas["rho"], MU,
-                       np.zeros((0, 0, 0)), *SIZES, 0.3, *periodic, fold, kp, *sums.values(), *vf, *finished, pair,
+                       np.zeros((0, 0, 0)) if inv_dbar is None else inv_dbar, *SIZES, 0.3, *periodic, fold, kp, *sums.values(), *vf, *finished, pair,
                        *eps)
     return kp, sums, eps, vf, bad
 
 
-@pytest.mark.parametrize("law_name,periodic,fold,pair",
-                         [(name, (False, False, True), True, True) for name in drag_laws.names()]
-                         + [("gidaspow", (True, False, False), False, True),
-                            ("gidaspow", (False, True, True), True, False)])
-def test_deposit3d_matches_cpu(law_name, periodic, fold, pair):
+@pytest.mark.parametrize("law_name,periodic,fold,pair,mixture",
+                         [(name, (False, False, True), True, True, False) for name in drag_laws.names()]
+                         + [("gidaspow", (True, False, False), False, True, False),
+                            ("gidaspow", (False, True, True), True, False, False),
+                            ("beetstra", (False, False, True), True, True, True),
+                            ("gidaspow", (True, False, True), False, True, True)])
+def test_deposit3d_matches_cpu(law_name, periodic, fold, pair, mixture):
     """K_p of each particle (every registered drag law), the face sums A_f, B_f on the x-, y- and z-faces, Σ K_p
     per cell and the particle volume on the faces of the pressure term, against ``_paired3d_kernels.deposit3d``;
-    out-of-range particles counted and given NaN as there."""
+    out-of-range particles counted and given NaN as there. ``mixture``: the polydisperse drag, y = d/D̄ with 1/D̄
+    of the cells interpolated to the particle (DEM book 2012 eqs 10-12)."""
     from fluidem.coupling import _paired3d_cuda as PC
 
     pos, vel, radius, volume, gas = _system()
     law = drag_laws.get(law_name)().pack()
-    kp, sums, eps, vf, bad = _cpu_deposit(law, pos, vel, radius, volume, gas, periodic, fold, pair)
+    inv_dbar = np.random.default_rng(4).uniform(100.0, 300.0, CELLS) if mixture else np.zeros((0, 0, 0))
+    kp, sums, eps, vf, bad = _cpu_deposit(law, pos, vel, radius, volume, gas, periodic, fold, pair, inv_dbar)
     assert 0 < bad < pos.shape[0] // 4
+    if mixture:  # y ≠ 1 changes K_p
+        mono = _cpu_deposit(law, pos, vel, radius, volume, gas, periodic, fold, pair)[0]
+        assert not np.allclose(kp[~np.isnan(kp)], mono[~np.isnan(mono)], rtol=1e-3)
     names = ("AU", "BU", "AV", "BV", "AW", "BW", "KC", "EU", "EV", "EW")
     shapes = [a.shape for a in sums.values()] + [e.shape for e in eps]
     dsums = dict(zip(names, _dev(*(np.zeros(s) for s in shapes))))
     d_kp, d_bad = _dev(np.zeros(pos.shape[0]), np.zeros(1, dtype=np.int32))
     args = _dev(law, pos, vel, radius, volume, gas["u"], gas["v"], gas["w"], gas["voidage"], gas["rho"])
-    PC.deposit3d[1, PC.THREADS](*args, MU, *SIZES, 0.3, *periodic, fold, d_kp, *(dsums[k] for k in names[:7]), pair,
+    PC.deposit3d[1, PC.THREADS](*args, MU, *_dev(inv_dbar), *SIZES, 0.3, *periodic, fold, d_kp, *(dsums[k] for k in names[:7]), pair,
                                 dsums["EU"], dsums["EV"], dsums["EW"], d_bad)
     got = {k: a.copy_to_host() for k, a in dsums.items()}
     assert int(d_bad.copy_to_host()[0]) == bad
@@ -226,9 +253,10 @@ def test_refusals_on_a_3d_grid():
         "coupling.gpu_exchange = 'host'"]
 
 
-def _bed(packing_case, n=216):
-    """A 3D bed of n spheres of 4 mm on a 4 × 6 × 4 gas grid, gas from below (y up), walls all round."""
-    case, _ = packing_case("linear_spring_dashpot", n=n, dimensions=3, speed=0.2, two_species=False)
+def _bed(packing_case, n=216, two_species=False):
+    """A 3D bed of n spheres of 4 mm (and 3.6 mm with ``two_species``) on a 4 × 6 × 4 gas grid, gas from below
+    (y up), walls all round."""
+    case, _ = packing_case("linear_spring_dashpot", n=n, dimensions=3, speed=0.2, two_species=two_species)
     data = case.model_dump()
     width, height, depth = data["walls"][0]["upper"]
     data["gravity"] = [0.0, -9.81, 0.0]
@@ -292,3 +320,34 @@ def test_coupled3d_run_device_matches_host(packing_case):
                      (on_device.solids_v, on_host.solids_v), (on_device.solids_w, on_host.solids_w)):
             assert np.abs(a - b).max() <= SUM_RTOL * np.abs(b).max()
     assert on_host.clipped > 0  # minimum_voidage 0.6 clips the packed cells
+
+
+def test_coupled3d_polydisperse_device_matches_host(packing_case):
+    """``polydisperse = "sauter_y2"`` on a 3D grid with the particle side on the device (1/D̄ of each cell from
+    the device's sums, y = d/D̄ in the device's K_p) against the host: two gas steps of four sub-steps agree to
+    round-off (the bounds of ``test_coupled3d_run_device_matches_host``)."""
+    from fluidem import Simulation
+    from fluidem.case import validate_case
+
+    data, height = _bed(packing_case, n=125, two_species=True)
+    data["coupling"]["polydisperse"] = "sauter_y2"
+    runs = {}
+    for mode in ("device", "host"):
+        data["coupling"]["gpu_exchange"] = mode
+        sim = Simulation(validate_case({**data, "device": "gpu"}))
+        sim.advance(2 * sim.gas.substeps)
+        runs[mode] = sim
+    dev, host = runs["device"], runs["host"]
+    assert dev.gas._device is not None and host.gas._device is None and dev.gas.gas_steps == 2
+    inv = host.gas._inv_dbar
+    assert inv.shape == CELLS and 1 / 4e-3 < inv.max() <= 1 / 3.6e-3 * (1.0 + 1e-12)
+    assert inv.min() >= 1 / 4e-3 * (1.0 - 1e-12) and np.any((inv > 250.001) & (inv < 277.7))  # mixed cells
+    assert np.abs(dev.gas._inv_dbar - inv).max() <= SUM_RTOL * inv.max()
+    assert np.abs(dev.state.position - host.state.position).max() <= 1e-9 * height
+    for a, b in ((dev.state.velocity, host.state.velocity), (dev.engine.ext_force, host.engine.ext_force)):
+        assert np.abs(a - b).max() <= 1e-9 * np.abs(b).max()
+    for k in ("p", "u", "v", "w"):
+        b = getattr(host.gas.state, k)
+        assert np.abs(getattr(dev.gas.state, k) - b).max() <= 1e-9 * np.abs(b).max(), k
+    kp = host.gas.checkpoint_arrays()["coupling/kp"]
+    assert np.abs(dev.gas.checkpoint_arrays()["coupling/kp"] - kp).max() <= 1e-9 * np.abs(kp).max()

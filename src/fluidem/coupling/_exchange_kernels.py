@@ -54,6 +54,21 @@ def store_force(out, total, q, fx, fy, fz, follow):
     out[q, 2] = fz
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def cell_drag(law, u, v, rho, voidage, solids_u, solids_v, mu, inv_dbar, mixture, i, j, d):
+    """(in range, β/(1 − ε)) of a particle of diameter d in cell (i, j) for ``cell_beta`` (Sun 2007 eq. 33): the
+    cell's ε and gas density, the slip |(u_cell, v_cell) − (v_s,x, v_s,y)| with u_cell, v_cell the means of the
+    cell's two faces, y = d/D̄ of the cell with ``mixture`` (else 1); (False, 0) where the drag arguments are out
+    of range."""
+    slip = math.hypot(0.5 * (u[i, j] + u[i + 1, j]) - solids_u[i, j],
+                      0.5 * (v[i, j] + v[i, j + 1]) - solids_v[i, j])
+    eps = voidage[i, j]
+    rg = rho[i, j]
+    if not _drag_arguments_valid(eps, slip, d, rg, mu):
+        return False, 0.0
+    return True, beta_per_solids(law, eps, slip, d, rg, mu, d * inv_dbar[i, j] if mixture else 1.0)
+
+
 @njit(cache=True, error_model="numpy")
 def cell_beta(law, position, radius, volume, u, v, rho, voidage, solids_u, solids_v, mu, inv_dbar, dx, dy,
               cell_volume, out):
@@ -83,14 +98,10 @@ def cell_beta(law, position, radius, volume, u, v, rho, voidage, solids_u, solid
         if d == done_d[i, j]:  # same cell, same diameter: same β/(1 − ε)
             b = done_b[i, j]
         else:
-            slip = math.hypot(0.5 * (u[i, j] + u[i + 1, j]) - solids_u[i, j],
-                              0.5 * (v[i, j] + v[i, j + 1]) - solids_v[i, j])
-            eps = voidage[i, j]
-            rg = rho[i, j]
-            if not _drag_arguments_valid(eps, slip, d, rg, mu):
+            ok, b = cell_drag(law, u, v, rho, voidage, solids_u, solids_v, mu, inv_dbar, mixture, i, j, d)
+            if not ok:
                 bad += 1
                 continue
-            b = beta_per_solids(law, eps, slip, d, rg, mu, d * inv_dbar[i, j] if mixture else 1.0)
             done_d[i, j] = d
             done_b[i, j] = b
         out[i, j] += b * volume[p]  # eq. 33

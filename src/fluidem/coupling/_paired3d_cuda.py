@@ -16,7 +16,9 @@ the CPU's (to round-off where the device contracts a multiply-add).
 ``forces3d``         F_p = K_p (u_p − v_p) − V_p ∇p_p into ext, the total following
                      (``_paired3d_kernels.particle_forces3d``; ``drag_update = "frozen"``).
 
-The monodisperse drag only (y = 1, ``coupling.polydisperse = "none"``): 1/D̄ per cell is a CPU map.
+With ``coupling.polydisperse = "sauter_y2"`` ``deposit3d`` takes 1/D̄ per cell (the host finishes it from the
+device's sums: ``_voidage3d_cuda.sauter_deposit3d``, ``exchange_gpu.sauter_finish``) and each particle's
+y = d/D̄ from it as the CPU does; the forces need only K_p.
 """
 import math
 
@@ -49,15 +51,17 @@ def _add3(E, i0, i1, a0, a1, j0, j1, b0, b1, k0, k1, c0, c1, q):
 
 
 @cached_kernel
-def deposit3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, dx, dy, dz, min_voidage, px, py, pz,
-              fold, kp, AU, BU, AV, BV, AW, BW, KC, pair, EU, EV, EW, bad):
+def deposit3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, dx, dy, dz, min_voidage,
+              px, py, pz, fold, kp, AU, BU, AV, BV, AW, BW, KC, pair, EU, EV, EW, bad):
     """K_p of each particle into kp, and its share of the face sums (``_paired3d_kernels.deposit3d`` before
     ``_coefficients``, the particles in any order): AU, BU (nx + 1, ny, nz), AV, BV (nx, ny + 1, nz), AW, BW
     (nx, ny, nz + 1), KC (nx, ny, nz) Σ K_p of the particles centred in each cell, and with ``pair`` EU, EV, EW
     the particle volume on the faces of its ∇p interpolation (always folded), all zeroed before and added into
     here. A particle whose drag arguments are out of range (``_exchange_kernels._drag_arguments_valid``) gets
     kp = NaN, deposits no drag and counts in bad[0]. law : the packed drag law (``DragLaw.pack``); position,
-    velocity : (N, 3); radius, volume, kp : (N,); u, v, w on their faces; voidage and rho (nx, ny, nz)."""
+    velocity : (N, 3); radius, volume, kp : (N,); u, v, w on their faces; voidage and rho (nx, ny, nz); inv_dbar
+    (nx, ny, nz): 1/D̄ of each cell for the polydisperse drag, y = d/D̄ with 1/D̄ interpolated as ε is (DEM book
+    2012 eqs 10-12), or (0, 0, 0): y = 1."""
     q = cuda.grid(1)
     if q >= position.shape[0]:
         return
@@ -93,7 +97,10 @@ def deposit3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu
         kp[q] = math.nan
         cuda.atomic.add(bad, 0, 1)
         return
-    k = beta_per_solids(law, eps, slip, d, rg, mu, 1.0) * volume[q]  # Sun 2007 eq. 29
+    yq = 1.0  # y = d/D̄ (DEM book 2012 eq. 11), 1/D̄ interpolated as ε is; 1 for a monodisperse bed
+    if inv_dbar.shape[0] > 0:
+        yq = d * mean3(inv_dbar, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, ck0, ck1, cwz0, cwz1)
+    k = beta_per_solids(law, eps, slip, d, rg, mu, yq) * volume[q]  # Sun 2007 eq. 29
     kp[q] = k
     ic = min(max(int(x * idx), 0), nx - 1)
     jc = min(max(int(y * idy), 0), ny - 1)

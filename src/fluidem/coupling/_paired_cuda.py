@@ -15,7 +15,9 @@ so each particle's K_p and force are the CPU's (to round-off where the device co
 ``forces``         F_p = K_p (u_p − v_p) − V_p ∇p_p into ext, the total following
                    (``_paired_kernels.particle_forces``; ``drag_update = "frozen"``).
 
-The monodisperse drag only (y = 1, ``coupling.polydisperse = "none"``): 1/D̄ per cell is a CPU map.
+With ``coupling.polydisperse = "sauter_y2"`` ``deposit`` takes 1/D̄ per cell (the host finishes it from the
+device's sums: ``_voidage_cuda.sauter_deposit``, ``exchange_gpu.sauter_finish``) and each particle's
+y = d/D̄ from it as the CPU does; the forces need only K_p.
 """
 import math
 
@@ -70,15 +72,16 @@ def _scatter(A, B, i0, i1, a0, a1, j0, j1, b0, b1, k, vel):
 
 
 @cached_kernel
-def deposit(law, position, velocity, radius, volume, u, v, voidage, rho, mu, dx, dy, min_voidage, px, py, fold, kp,
-            AU, BU, AV, BV, KC, solids, EU, EV, bad):
+def deposit(law, position, velocity, radius, volume, u, v, voidage, rho, mu, inv_dbar, dx, dy, min_voidage, px, py,
+            fold, kp, AU, BU, AV, BV, KC, solids, EU, EV, bad):
     """K_p of each particle into kp, and its share of the face sums (``_paired_kernels.deposit``'s first two
     passes, the particles in any order): AU, BU (nx + 1, ny), AV, BV (nx, ny + 1), KC (nx, ny) Σ K_p of the
     particles centred in each cell, and with ``solids`` EU, EV the particle volume on the faces of its ∇p
     interpolation, all zeroed before and added into here. A particle whose drag arguments are out of range
     (``_exchange_kernels._drag_arguments_valid``) gets kp = NaN, deposits no drag and counts in bad[0].
     law : the packed drag law (``DragLaw.pack``); position, velocity : (N, 3); radius, volume, kp : (N,);
-    u (nx + 1, ny), v (nx, ny + 1), voidage and rho (nx, ny): the gas."""
+    u (nx + 1, ny), v (nx, ny + 1), voidage and rho (nx, ny): the gas; inv_dbar (nx, ny): 1/D̄ of each cell for
+    the polydisperse drag, y = d/D̄ with 1/D̄ interpolated as ε is (DEM book 2012 eqs 10-12), or (0, 0): y = 1."""
     q = cuda.grid(1)
     if q >= position.shape[0]:
         return
@@ -116,7 +119,9 @@ def deposit(law, position, velocity, radius, volume, u, v, voidage, rho, mu, dx,
         kp[q] = math.nan
         cuda.atomic.add(bad, 0, 1)
         return
-    k = beta_per_solids(law, eps, slip, d, rg, mu, 1.0) * volume[q]  # Sun 2007 eq. 29
+    # y = d/D̄ (DEM book 2012 eq. 11) with 1/D̄ interpolated as ε is; 1 for a monodisperse bed
+    yq = d * mean(inv_dbar, ci0, ci1, cw0, cw1, cj0, cj1, cv0, cv1) if inv_dbar.shape[0] > 0 else 1.0
+    k = beta_per_solids(law, eps, slip, d, rg, mu, yq) * volume[q]  # Sun 2007 eq. 29
     kp[q] = k
     ic = min(max(int(x / dx), 0), nx - 1)
     jc = min(max(int(y / dy), 0), ny - 1)

@@ -500,6 +500,22 @@ def cell_faces(beta, solids_u, solids_v, px, py, bu, su, bv, sv):
     _faces_of_axis(beta.T, solids_v.T, py, bv.T, sv.T)
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def cell_force(x, y, vq, i, j, solids, beta, solids_u, solids_v, u, v, p, idx, idy, cell_volume, px, py,
+               pressure_force):
+    """(F_x, F_y) of ``cell_forces`` for a particle of volume vq centred at (x, y) in cell (i, j), ``solids``
+    Σ V_r of the cell's particles: its share V_q/Σ V_r of the cell's drag β V_c (u_c − u_s,c), minus V_q ∇p_q."""
+    nx, ny = beta.shape
+    share = vq / solids[i, j] * beta[i, j] * cell_volume
+    fx = share * (0.5 * (u[i, j] + u[i + 1, j]) - solids_u[i, j])
+    fy = share * (0.5 * (v[i, j] + v[i, j + 1]) - solids_v[i, j])
+    if pressure_force:
+        _, _, gx, gy = _gas_at(x, y, u, v, p, idx, idy, nx, ny, px, py, True, False, True)
+        fx -= vq * gx
+        fy -= vq * gy
+    return fx, fy
+
+
 @njit(cache=True, error_model="numpy")
 def cell_forces(position, velocity, volume, beta, solids_u, solids_v, u, v, p, dx, dy, cell_volume, px, py,
                 pressure_force, dim2, out, total):
@@ -519,15 +535,6 @@ def cell_forces(position, velocity, volume, beta, solids_u, solids_v, u, v, p, d
     idx, idy = 1.0 / dx, 1.0 / dy
     follow = total.shape[0] > 0
     for q in range(n):
-        i = cell[q, 0]
-        j = cell[q, 1]
-        share = volume[q] / solids[i, j] * beta[i, j] * cell_volume
-        fx = share * (0.5 * (u[i, j] + u[i + 1, j]) - solids_u[i, j])
-        fy = share * (0.5 * (v[i, j] + v[i, j + 1]) - solids_v[i, j])
-        fz = 0.0
-        if pressure_force:
-            _, _, gx, gy = _gas_at(position[q, 0], position[q, 1], u, v, p, idx, idy, nx, ny, px, py, True, False,
-                                   True)
-            fx -= volume[q] * gx
-            fy -= volume[q] * gy
-        store_force(out, total, q, fx, fy, fz, follow)
+        fx, fy = cell_force(position[q, 0], position[q, 1], volume[q], cell[q, 0], cell[q, 1], solids, beta, solids_u,
+                            solids_v, u, v, p, idx, idy, cell_volume, px, py, pressure_force)
+        store_force(out, total, q, fx, fy, 0.0, follow)

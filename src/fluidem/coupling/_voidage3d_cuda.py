@@ -7,7 +7,9 @@ from the CPU's own source with every helper it calls: ``drag._dispatch_cuda.devi
 wrapped and the edge cells of a non-periodic axis unbounded, as ``_voidage3d_kernels.volume_deposit``. Both
 add the velocity weights of ``_voidage3d_kernels.deposit_solids3d`` too: by volume (Sun 2007 eq. 35, the
 deposit itself) or by number (Hoomans 1996 eq. 50: a count of 1 and v_p in the cell of the centre). The
-additions are atomic: the cells' sums are the CPU's to round-off, added in another order (and not bit for
+``sauter_deposit3d`` adds Σ V_p/d_p and Σ V_p of the centres in each cell (``_voidage3d_kernels.
+sauter_inverse3d``'s sums; the host finishes 1/D̄: ``exchange_gpu.sauter_finish``). The additions are atomic:
+the cells' sums are the CPU's to round-off, added in another order (and not bit for
 bit from run to run). The rest of the map (the fraction over V_cell, smoothing, clipping, the averages) works
 on cell arrays and runs on the host (``exchange3d_gpu.DeviceExchange3D.map``), so only cell arrays leave the
 device.
@@ -109,6 +111,23 @@ def volume_deposit3d(position, velocity, radius, dx, dy, dz, inv_dx, inv_dy, inv
                         _add4(solids, wvx, wvy, wvz, i % nx, j % ny, k % nz, v, vx, vy, vz)
                     else:
                         cuda.atomic.add(solids, (i % nx, j % ny, k % nz), v)
+
+
+@cached_kernel
+def sauter_deposit3d(position, radius, volume, inv_dx, inv_dy, inv_dz, by_size, by_volume):
+    """by_size[c] += V_p/d_p and by_volume[c] += V_p for the cell c = (i, j, k) of each centre
+    (``_voidage3d_kernels.sauter_inverse3d``'s sums: 1/D̄ = Σ V_p/d_p / Σ V_p, DEM book 2012 two-phase chapter,
+    eq. 10), cells as ``cell_index``. position : (N, 3); radius, volume : (N,); by_size, by_volume :
+    (nx, ny, nz), accumulated into."""
+    q = cuda.grid(1)
+    if q >= position.shape[0]:
+        return
+    nx, ny, nz = by_size.shape
+    i = cell_index(position[q, 0], inv_dx, nx)
+    j = cell_index(position[q, 1], inv_dy, ny)
+    k = cell_index(position[q, 2], inv_dz, nz)
+    cuda.atomic.add(by_size, (i, j, k), volume[q] / (2.0 * radius[q]))
+    cuda.atomic.add(by_volume, (i, j, k), volume[q])
 
 
 @cached_kernel

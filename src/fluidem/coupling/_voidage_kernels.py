@@ -132,46 +132,49 @@ def area_deposit(px, py, radius, scale, vx, vy, dx, dy, out, out_vx, out_vy):
     A_pij is the exact area of the disc (radius[p], centre (px, py)) in cell (i, j)
     (Hoomans 1996 §3.4, multiple-cell overlap). Parts of a disc outside the grid are dropped.
     """
-    nx, ny = out.shape
     pts = np.empty(6)
     for p in range(px.size):
-        r = radius[p]
-        a0 = int(math.floor((px[p] - r) / dx))
-        a1 = int(math.floor((px[p] + r) / dx))
-        b0 = int(math.floor((py[p] - r) / dy))
-        b1 = int(math.floor((py[p] + r) / dy))
-        full = math.pi * r * r
-        if a0 == a1 and b0 == b1 and 0 <= a0 < nx and 0 <= b0 < ny:
-            # the disc lies inside one cell (about half the particles of Hoomans' beds): its whole area
-            _add(out, out_vx, out_vy, a0, b0, scale[p] * full, vx[p], vy[p])
-            continue
-        if b0 == b1 and a1 == a0 + 1 and 0 <= b0 < ny:
-            # cut by one vertical cell face only: a circular segment on either side (another third)
-            low = full - _segment(a1 * dx - px[p], r)  # the part left of the face, in cell a0
-            if 0 <= a0 < nx:
-                _add(out, out_vx, out_vy, a0, b0, scale[p] * low, vx[p], vy[p])
-            if 0 <= a1 < nx:
-                _add(out, out_vx, out_vy, a1, b0, scale[p] * (full - low), vx[p], vy[p])
-            continue
-        if a0 == a1 and b1 == b0 + 1 and 0 <= a0 < nx:
-            low = full - _segment(b1 * dy - py[p], r)  # cut by one horizontal face: the part below it
-            if 0 <= b0 < ny:
-                _add(out, out_vx, out_vy, a0, b0, scale[p] * low, vx[p], vy[p])
-            if 0 <= b1 < ny:
-                _add(out, out_vx, out_vy, a0, b1, scale[p] * (full - low), vx[p], vy[p])
-            continue
-        i0 = max(a0, 0)
-        i1 = min(a1, nx - 1)
-        j0 = max(b0, 0)
-        j1 = min(b1, ny - 1)
-        for i in range(i0, i1 + 1):
-            for j in range(j0, j1 + 1):
-                a = disc_rect_area_into(px[p], py[p], r, i * dx, (i + 1) * dx, j * dy, (j + 1) * dy, pts)
-                if a > 0.0:
-                    w = scale[p] * a
-                    out[i, j] += w
-                    out_vx[i, j] += w * vx[p]
-                    out_vy[i, j] += w * vy[p]
+        area_deposit_one(px[p], py[p], radius[p], scale[p], vx[p], vy[p], dx, dy, out, out_vx, out_vy, pts)
+
+
+@njit(cache=True, inline="always")
+def area_deposit_one(x, y, r, s, vx, vy, dx, dy, out, out_vx, out_vy, pts):
+    """One particle of ``area_deposit``: s A_ij (and s A_ij v) into every cell (i, j) the disc of radius r centred
+    at (x, y) overlaps, through ``_add`` (a device version adds atomically); pts: scratch of ≥ 6 float64."""
+    nx, ny = out.shape
+    a0 = int(math.floor((x - r) / dx))
+    a1 = int(math.floor((x + r) / dx))
+    b0 = int(math.floor((y - r) / dy))
+    b1 = int(math.floor((y + r) / dy))
+    full = math.pi * r * r
+    if a0 == a1 and b0 == b1 and 0 <= a0 < nx and 0 <= b0 < ny:
+        # the disc lies inside one cell (about half the particles of Hoomans' beds): its whole area
+        _add(out, out_vx, out_vy, a0, b0, s * full, vx, vy)
+        return
+    if b0 == b1 and a1 == a0 + 1 and 0 <= b0 < ny:
+        # cut by one vertical cell face only: a circular segment on either side (another third)
+        low = full - _segment(a1 * dx - x, r)  # the part left of the face, in cell a0
+        if 0 <= a0 < nx:
+            _add(out, out_vx, out_vy, a0, b0, s * low, vx, vy)
+        if 0 <= a1 < nx:
+            _add(out, out_vx, out_vy, a1, b0, s * (full - low), vx, vy)
+        return
+    if a0 == a1 and b1 == b0 + 1 and 0 <= a0 < nx:
+        low = full - _segment(b1 * dy - y, r)  # cut by one horizontal face: the part below it
+        if 0 <= b0 < ny:
+            _add(out, out_vx, out_vy, a0, b0, s * low, vx, vy)
+        if 0 <= b1 < ny:
+            _add(out, out_vx, out_vy, a0, b1, s * (full - low), vx, vy)
+        return
+    i0 = max(a0, 0)
+    i1 = min(a1, nx - 1)
+    j0 = max(b0, 0)
+    j1 = min(b1, ny - 1)
+    for i in range(i0, i1 + 1):
+        for j in range(j0, j1 + 1):
+            a = disc_rect_area_into(x, y, r, i * dx, (i + 1) * dx, j * dy, (j + 1) * dy, pts)
+            if a > 0.0:
+                _add(out, out_vx, out_vy, i, j, s * a, vx, vy)
 
 
 @njit(cache=True)

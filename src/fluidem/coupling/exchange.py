@@ -197,15 +197,19 @@ class GasCoupling:
 
     def cell_beta(self, voidage, solids_u, solids_v) -> np.ndarray:
         """β per cell [kg m^-3 s^-1], (nx, ny): Σ_p β/(1 − ε)(ε, |u − v_s|, d_p) V_p / V_cell (Sun 2007 eq. 33)."""
-        gd, st, gs = self.grid, self._particles(), self.state
+        gd, gs = self.grid, self.state
         fields = [np.asarray(a, float) for a in (voidage, solids_u, solids_v)]
         if any(f.shape != gd.shape for f in fields):
             raise ValueError(f"voidage, solids_u, solids_v must have shape {gd.shape}; "
                              f"got {', '.join(str(f.shape) for f in fields)}")
         self._check_gas()
         beta = np.empty(gd.shape)
-        bad = K.cell_beta(self._gas_law, st.position, st.radius, self.volume, gs.u, gs.v, gs.rho, *fields,
-                          self.solver.props.viscosity, self._inv_dbar, gd.dx, gd.dy, gd.cell_volume, beta)
+        if self._device is not None:  # the particles' sums on the GPU (exchange_gpu.DeviceExchange.cell_beta)
+            bad = self._device.cell_beta(*fields, beta)
+        else:
+            st = self._particles()
+            bad = K.cell_beta(self._gas_law, st.position, st.radius, self.volume, gs.u, gs.v, gs.rho, *fields,
+                              self.solver.props.viscosity, self._inv_dbar, gd.dx, gd.dy, gd.cell_volume, beta)
         if bad:
             raise ValueError(f"cell β: drag arguments out of range for {bad} particles "
                              "(voidage must lie in (0, 1], gas density > 0)")
@@ -308,7 +312,9 @@ class GasCoupling:
         pv = None
         if self._pair_pressure:
             pv = self._pressure_voidage
-            if self.exchange != "particle":  # "particle": ``_deposit`` has filled them
+            if self.exchange != "particle" and self._device is not None:  # "cell" with the particles on a GPU
+                self._device.pressure_voidage(*pv)
+            elif self.exchange != "particle":  # "particle": ``_deposit`` has filled them
                 st = self._particles()
                 P.pressure_voidage(st.position, self.volume, gd.dx, gd.dy, *self._periodic, *self._face_volumes,
                                    self.mapping.minimum_voidage, *pv)
@@ -379,9 +385,12 @@ class GasCoupling:
         out of range raise ValueError after the pass (those particles' forces are then NaN).
         """
         eng = self.engine
-        if self._device is not None and self._paired_ready:  # the "particle" exchange, on the GPU
+        if self._device is not None and self._paired_ready:  # the "particle" or "cell" exchange, on the GPU
             self._check_gas()
-            self._device.set_forces(self._split, bool(self.options.pressure_gradient_force))
+            if self.exchange == "cell":
+                self._device.set_cell_forces(bool(self.options.pressure_gradient_force))
+            else:
+                self._device.set_forces(self._split, bool(self.options.pressure_gradient_force))
             return
         if self._split and self._paired_ready:
             st, gs, gd = self._particles(), self.state, self.grid

@@ -100,6 +100,8 @@ class DeviceExchange3D(DeviceExchange):
         else:
             for a in self._host_cells:
                 a[...] = 0.0
+        if self._mixture:  # the polydisperse drag's 1/D̄ of this map (GasCoupling3D._map)
+            self._sauter(grid)
         # as ``_voidage3d_kernels.deposit_solids3d``: the fraction over V_cell; the velocity weights are the
         # deposit (Sun 2007 eq. 35) or the counts (Hoomans 1996 eq. 50)
         wsum = solids.copy() if by_volume else count
@@ -130,9 +132,10 @@ class DeviceExchange3D(DeviceExchange):
             g, threads = self._gas, self._pc.THREADS
             self._pc.deposit3d[self._blocks(threads), threads](
                 self.law, d["position"], d["velocity"], d["radius"], self._volume(), g["u"], g["v"], g["w"],
-                g["voidage"], g["rho"], float(cp.solver.props.viscosity), float(gd.dx), float(gd.dy), float(gd.dz),
-                float(cp.mapping.minimum_voidage), *cp._periodic, bool(cp._fold), self.kp, s["AU"], s["BU"],
-                s["AV"], s["BV"], s["AW"], s["BW"], s["KC"], pair, s["EU"], s["EV"], s["EW"], self.bad)
+                g["voidage"], g["rho"], float(cp.solver.props.viscosity), self._send_inv_dbar(), float(gd.dx),
+                float(gd.dy), float(gd.dz), float(cp.mapping.minimum_voidage), *cp._periodic, bool(cp._fold), self.kp,
+                s["AU"], s["BU"], s["AV"], s["BV"], s["AW"], s["BW"], s["KC"], pair, s["EU"], s["EV"], s["EW"],
+                self.bad)
         for k, host in zip(("AU", "BU", "AV", "BV", "AW", "BW", "KC"), (*cp._sums, cp._kp_cells)):
             s[k].copy_to_host(host)
         for a in range(3):

@@ -2,9 +2,11 @@
 
 ``GasCoupling`` hands its per-particle stages to a ``DeviceExchange`` when the engine keeps its particles on
 the device (``SoftSphereGPUEngine``) and every option of the coupling has a device kernel (``refusals``):
-the voidage map's deposit (``_voidage_cuda``), each particle's drag coefficient and the face sums of the
-``particle`` exchange (``_paired_cuda.deposit``), and the gas force on each particle (``_paired_cuda.forces``,
-``forces_split``). Per gas step only cell and face arrays cross between host and device: the gas fields go
+the voidage map's deposit by centre or by exact disc areas and the cells' Sauter sums of a polydisperse drag
+(``_voidage_cuda``), each particle's drag coefficient and the face sums of the ``particle`` exchange
+(``_paired_cuda.deposit``), and the gas force on each particle (``_paired_cuda.forces``, ``forces_split``); for
+the ``cell`` exchange the cell β sums, the pressure voidage's face sums and each particle's share of its cell's
+drag (``_cell_cuda``). Per gas step only cell and face arrays cross between host and device: the gas fields go
 to the device, the deposited sums come back, and the host finishes them with the CPU's own kernels
 (``_voidage_kernels.finish_map``, ``_paired_kernels._face_coefficients``, ``_face_voidage``). K_p stays on the
 device; ``fetch_kp`` brings it to the host for checkpoints and ``exchange_balance``.
@@ -26,15 +28,26 @@ def refusals(coupling, dimensions: int = 2) -> list[str]:
     opts, out = coupling.options, []
     if opts.gpu_exchange == "host":
         out.append("coupling.gpu_exchange = 'host'")
-    if coupling.exchange != "particle":
-        out.append(f"coupling.momentum_exchange = {coupling.exchange!r} (the device runs 'particle')")
-    if dimensions == 2 and coupling.mapping.method != "centroid":
-        out.append(f"coupling.voidage.method = {coupling.mapping.method!r} (the device deposits by centre: "
-                   "'centroid')")
-    if coupling.polydisperse != "none":
-        out.append(f"coupling.polydisperse = {coupling.polydisperse!r} (the cells' Sauter mean diameter is mapped "
-                   "on the host)")
+    if coupling.exchange not in ("particle", "cell") or (dimensions == 3 and coupling.exchange != "particle"):
+        runs = "'particle'" if dimensions == 3 else "'particle' and 'cell'"
+        out.append(f"coupling.momentum_exchange = {coupling.exchange!r} (the device runs {runs})")
+    if dimensions == 2 and coupling.mapping.method not in ("centroid", "area", "area_volume"):
+        out.append(f"coupling.voidage.method = {coupling.mapping.method!r} (the device maps 'centroid', 'area' and "
+                   "'area_volume' on a 2D grid)")
     return out
+
+
+def sauter_finish(by_size, by_volume, out) -> float:
+    """out ← 1/D̄ [1/m] of each cell from the device's sums (``_voidage_cuda.sauter_deposit``): Σ V_p/d_p / Σ V_p
+    (DEM book 2012 two-phase chapter, eq. 10), a cell without particles taking the bed's value, as
+    ``_voidage_kernels.sauter_inverse`` (and ``_voidage3d_kernels.sauter_inverse3d``) finish theirs; returns 1/D̄
+    of the bed (0 without particles). by_size, by_volume, out : the grid's cell shape."""
+    total_v = float(by_volume.sum())
+    bed = float(by_size.sum()) / total_v if total_v > 0.0 else 0.0
+    full = by_volume > 0.0
+    np.divide(by_size, by_volume, out=out, where=full)
+    out[~full] = bed
+    return bed
 
 
 def device_exchange(coupling):
@@ -70,6 +83,15 @@ class DeviceExchange:
         self.kp = cuda.to_device(np.zeros(max(self.n, 1)))
         self.bad = cuda.to_device(np.zeros(1, dtype=np.int32))
         self._grid_arrays(gd)
+        # the polydisperse drag's 1/D̄ per cell ((0, 0) or (0, 0, 0) for none) and the device's sums for it
+        self._mixture = coupling._inv_dbar.shape[0] > 0
+        self.inv_dbar = cuda.to_device(np.zeros(coupling._inv_dbar.shape))
+        self._sauter_sums = tuple(cuda.device_array(gd.shape) for _ in range(2)) if self._mixture else ()
+        self._host_sauter = tuple(np.empty(gd.shape) for _ in self._sauter_sums)
+        # the "cell" exchange: Σ β/(1 − ε) V_p, Σ V_p by ``_cell``, and the cell β, u_s, v_s the forces share
+        self._cellx = {k: cuda.device_array(gd.shape) for k in ("sum", "solids", "beta", "su", "sv")} \
+            if coupling.exchange == "cell" else {}
+        self.gas_law = cuda.to_device(np.ascontiguousarray(coupling._gas_law)) if self._cellx else None
 
     @staticmethod
     def _kernel_modules():
@@ -105,14 +127,44 @@ class DeviceExchange:
             self._volume_of = vol
         return self.volume
 
+    def _sauter(self, grid) -> None:
+        """coupling._inv_dbar ← 1/D̄ of each cell at the current particles (``voidage.sauter_inverse``): the sums on
+        the device (``_voidage_cuda.sauter_deposit``, ``_voidage3d_cuda.sauter_deposit3d``), the ratio on the host
+        (``sauter_finish``)."""
+        if self.n:
+            d = self.engine.device_arrays()
+            for a in self._sauter_sums:
+                self._zero(a)
+            threads = self._vc.THREADS
+            if grid.dimensions == 3:
+                kernel, inv = self._vc.sauter_deposit3d, (1.0 / grid.dx, 1.0 / grid.dy, 1.0 / grid.dz)
+            else:
+                kernel, inv = self._vc.sauter_deposit, (1.0 / grid.dx, 1.0 / grid.dy)
+            kernel[self._blocks(threads), threads](d["position"], d["radius"], self._volume(), *inv,
+                                                   *self._sauter_sums)
+            for dev, host in zip(self._sauter_sums, self._host_sauter):
+                dev.copy_to_host(host)
+        else:
+            for a in self._host_sauter:
+                a[...] = 0.0
+        sauter_finish(*self._host_sauter, self.coupling._inv_dbar)
+
+    def _send_inv_dbar(self):
+        """The coupling's 1/D̄ per cell on the device (for ``deposit``), or the empty array of a monodisperse
+        drag."""
+        if self._mixture:
+            self.inv_dbar.copy_to_device(np.ascontiguousarray(self.coupling._inv_dbar, dtype=float))
+        return self.inv_dbar
+
     def _send(self, **fields) -> None:
         for k, a in fields.items():
             self._gas[k].copy_to_device(np.ascontiguousarray(a, dtype=float))
 
     # ------------------------------------------------------------ stages
     def map(self, mapping, grid) -> SolidsMap:
-        """particles → grid (``VoidageMapping.map_particles`` with method 'centroid'): the deposit on the device,
-        the rest on the host (``_voidage_kernels.finish_map``)."""
+        """particles → grid (``VoidageMapping.map_particles``, method 'centroid', 'area' or 'area_volume'): the
+        deposit on the device (``_voidage_cuda.centroid_deposit``, ``area_deposit``), the rest on the host
+        (``_voidage_kernels.finish_map``)."""
         shape = grid.shape
         eps, su, sv = np.empty(shape), np.empty(shape), np.empty(shape)
         solids, count, wvx, wvy = self._host_cells
@@ -122,16 +174,24 @@ class DeviceExchange:
                 self._zero(a)
             threads = self._vc.THREADS
             by_volume = mapping.velocity_weighting == "volume"
-            self._vc.centroid_deposit[self._blocks(threads), threads](
-                d["position"], d["velocity"], self._volume(), 1.0 / grid.dx, 1.0 / grid.dy, by_volume, *self._cells)
+            if mapping.method == "centroid":
+                self._vc.centroid_deposit[self._blocks(threads), threads](
+                    d["position"], d["velocity"], self._volume(), 1.0 / grid.dx, 1.0 / grid.dy, by_volume,
+                    *self._cells)
+            else:  # exact disc areas (Hoomans 1996 §3.4), 'area_volume' sharing V_p by them
+                self._vc.area_deposit[self._blocks(threads), threads](
+                    d["position"], d["velocity"], d["radius"], self._volume(), mapping.method == "area_volume",
+                    float(grid.dx), float(grid.dy), by_volume, *self._cells)
             for dev, host in zip(self._cells, self._host_cells):
                 dev.copy_to_host(host)
         else:
             for a in self._host_cells:
                 a[...] = 0.0
             by_volume = False
-        # as ``_voidage_kernels.deposit_solids``: the fraction over V_cell; the velocity weights are the counts
-        # (Hoomans 1996 eq. 50) or the volumes (Sun 2007 eq. 35)
+        if self._mixture:  # the polydisperse drag's 1/D̄ of this map (GasCoupling._map)
+            self._sauter(grid)
+        # as ``_voidage_kernels.deposit_solids``: the fraction over V_cell (dx dy for 'area'); the velocity weights
+        # are the counts (Hoomans 1996 eq. 50) or the deposit (Sun 2007 eq. 35)
         wsum = solids.copy() if by_volume else count
         frac = solids / V._norm(grid, mapping.method)
         w = mapping.smoothing_width
@@ -155,7 +215,7 @@ class DeviceExchange:
             g, threads = self._gas, self._pc.THREADS
             self._pc.deposit[self._blocks(threads), threads](
                 self.law, d["position"], d["velocity"], d["radius"], self._volume(), g["u"], g["v"], g["voidage"],
-                g["rho"], float(cp.solver.props.viscosity), float(gd.dx), float(gd.dy),
+                g["rho"], float(cp.solver.props.viscosity), self._send_inv_dbar(), float(gd.dx), float(gd.dy),
                 float(cp.mapping.minimum_voidage), *cp._periodic, bool(cp._fold), self.kp, s["AU"], s["BU"], s["AV"],
                 s["BV"], s["KC"], solids, s["EU"], s["EV"], self.bad)
         au, bu, av, bv = cp._faces
@@ -171,6 +231,70 @@ class DeviceExchange:
             P._face_voidage(eu, VU, cp.mapping.minimum_voidage)
             P._face_voidage(ev, VV, cp.mapping.minimum_voidage)
         return int(self.bad.copy_to_host()[0])
+
+    # ------------------------------------------------------------ the "cell" exchange
+    def cell_beta(self, voidage, solids_u, solids_v, out) -> int:
+        """out ← β per cell [kg m^-3 s^-1] of the "cell" exchange (``_exchange_kernels.cell_beta``, Sun 2007
+        eq. 33): Σ β/(1 − ε) V_p of each cell on the device (``_cell_cuda.cell_beta_deposit``), / V_cell on the
+        host; returns the number of particles whose drag arguments are out of range."""
+        from . import _cell_cuda as CC
+
+        cp, gd, gs, c = self.coupling, self.coupling.grid, self.coupling.state, self._cellx
+        self._zero(c["sum"])
+        self._zero_bad()
+        if self.n:
+            d = self.engine.device_arrays()
+            self._send(voidage=voidage, rho=gs.rho, u=gs.u, v=gs.v)
+            c["su"].copy_to_device(np.ascontiguousarray(solids_u, dtype=float))
+            c["sv"].copy_to_device(np.ascontiguousarray(solids_v, dtype=float))
+            g = self._gas
+            CC.cell_beta_deposit[self._blocks(CC.THREADS), CC.THREADS](
+                self.gas_law, d["position"], d["radius"], self._volume(), g["u"], g["v"], g["rho"], g["voidage"],
+                c["su"], c["sv"], float(cp.solver.props.viscosity), self._send_inv_dbar(), float(gd.dx),
+                float(gd.dy), c["sum"], self.bad)
+        c["sum"].copy_to_host(out)
+        out /= gd.cell_volume
+        return int(self.bad.copy_to_host()[0])
+
+    def pressure_voidage(self, eu, ev) -> None:
+        """eu, ev ← the pressure voidage of the "cell" exchange (``_paired_kernels.pressure_voidage``): the face
+        sums Σ w_pf V_p on the device (``_cell_cuda.pressure_deposit``), 1 − Σ/V_f clipped on the host."""
+        from . import _cell_cuda as CC
+
+        cp, gd, s = self.coupling, self.coupling.grid, self._sums
+        self._zero(s["EU"])
+        self._zero(s["EV"])
+        if self.n:
+            d = self.engine.device_arrays()
+            CC.pressure_deposit[self._blocks(CC.THREADS), CC.THREADS](
+                d["position"], self._volume(), float(gd.dx), float(gd.dy), *cp._periodic, s["EU"], s["EV"])
+        s["EU"].copy_to_host(eu)
+        s["EV"].copy_to_host(ev)
+        VU, VV = cp._face_volumes
+        P._face_voidage(eu, VU, cp.mapping.minimum_voidage)
+        P._face_voidage(ev, VV, cp.mapping.minimum_voidage)
+
+    def set_cell_forces(self, pressure: bool) -> None:
+        """The "cell" exchange's gas force on each particle into the engine's ``ext_force``, its total force
+        following (``_paired_kernels.cell_forces``): Σ V_p per cell (``_cell_cuda.cell_solids``), then each
+        particle's share of its cell's drag (``_cell_cuda.forces``); the cell β, u_s, v_s of the gas step cross
+        once."""
+        from . import _cell_cuda as CC
+
+        if self.n == 0:
+            return
+        cp, gd, gs, c = self.coupling, self.coupling.grid, self.coupling.state, self._cellx
+        d = self.engine.device_arrays()
+        for k, a in zip(("beta", "su", "sv"), cp._cell_inputs):
+            c[k].copy_to_device(np.ascontiguousarray(a, dtype=float))
+        self._send(u=gs.u, v=gs.v, p=gs.p)
+        self._zero(c["solids"])
+        blocks, threads, g = self._blocks(CC.THREADS), CC.THREADS, self._gas
+        CC.cell_solids[blocks, threads](d["position"], self._volume(), float(gd.dx), float(gd.dy), c["solids"])
+        CC.forces[blocks, threads](d["position"], self._volume(), c["solids"], c["beta"], c["su"], c["sv"], g["u"],
+                                   g["v"], g["p"], float(gd.dx), float(gd.dy), float(gd.cell_volume), *cp._periodic,
+                                   bool(pressure), d["ext_force"], d["force"])
+        self.engine.device_changed(("ext_force", "force"))
 
     def _zero_bad(self) -> None:
         self.bad.copy_to_device(np.zeros(1, dtype=np.int32))

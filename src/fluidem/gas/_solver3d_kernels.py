@@ -21,7 +21,7 @@ edges: ``T[c]`` the (a, b) component, a = (c + 1) % 3, b = (c + 2) % 3, on the e
 indexed by their face lines along a and b and their cell along c.
 """
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from ._layout3d import (
     C_E,
@@ -189,15 +189,17 @@ def fill_face_ghosts(W, flags, nx, ny, nz):
 
 
 # ---------------------------------------------------------------------------- centre values
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", parallel=True)
 def update_density(C, rho_factor, rho_const, p_ref):
     """ρ = (p' + p_ref) M/(RT) everywhere (Hoomans 1996 eq. 44; C[C_P] is the pressure relative to
-    p_ref), or the constant density when rho_factor is 0."""
+    p_ref), or the constant density when rho_factor is 0. Rows (i, j) on Numba's threads."""
     P, RHO = C[C_P], C[C_RHO]
-    for i in range(P.shape[0]):
-        for j in range(P.shape[1]):
-            for k in range(P.shape[2]):
-                RHO[i, j, k] = rho_factor * (P[i, j, k] + p_ref) if rho_factor != 0.0 else rho_const
+    n1, n2 = P.shape[1], P.shape[2]
+    for ij in prange(P.shape[0] * n1):
+        i = ij // n1
+        j = ij - i * n1
+        for k in range(n2):
+            RHO[i, j, k] = rho_factor * (P[i, j, k] + p_ref) if rho_factor != 0.0 else rho_const
 
 
 @njit(cache=True, error_model="numpy")
@@ -222,121 +224,166 @@ def face_voidage(E, l0, l1, l2, r0, r1, r2, kind, sign):
 @njit(cache=True, error_model="numpy")
 def mass_fluxes(W, Q, C, K, flags, nx, ny, nz):
     """Q = (ερ)_f w on the faces of every direction [kg m^-2 s^-1], ghosts filled like velocities."""
-    E, RHO = C[C_E], C[C_RHO]
-    for a in range(3):
-        ex, ey, ez = unit(a)
-        kind, sign = K[K_KIND, a], K[K_SIGN, a]
-        for i in range(nx + ex):
-            for j in range(ny + ey):
-                for k in range(nz + ez):
-                    ef = face_voidage(E, i + 1 - ex, j + 1 - ey, k + 1 - ez, i + 1, j + 1, k + 1, kind[i, j, k],
-                                      sign[i, j, k])
-                    rf = 0.5 * (RHO[i + 1 - ex, j + 1 - ey, k + 1 - ez] + RHO[i + 1, j + 1, k + 1])
-                    Q[a, i + 2, j + 2, k + 2] = ef * rf * W[a, i + 2, j + 2, k + 2]
+    _mass_flux_faces(W, Q, C, K, nx, ny, nz)
     fill_face_ghosts(Q, flags, nx, ny, nz)
 
 
+@njit(cache=True, error_model="numpy", parallel=True)
+def _mass_flux_faces(W, Q, C, K, nx, ny, nz):
+    """The faces of ``mass_fluxes``, the face rows (i, j) of all three axes on Numba's threads."""
+    E, RHO = C[C_E], C[C_RHO]
+    for ij in prange((nx + 1) * (ny + 1)):
+        i = ij // (ny + 1)
+        j = ij - i * (ny + 1)
+        for a in range(3):
+            ex, ey, ez = unit(a)
+            if i >= nx + ex or j >= ny + ey:
+                continue
+            for k in range(nz + ez):
+                ef = face_voidage(E, i + 1 - ex, j + 1 - ey, k + 1 - ez, i + 1, j + 1, k + 1, K[K_KIND, a, i, j, k],
+                                  K[K_SIGN, a, i, j, k])
+                rf = 0.5 * (RHO[i + 1 - ex, j + 1 - ey, k + 1 - ez] + RHO[i + 1, j + 1, k + 1])
+                Q[a, i + 2, j + 2, k + 2] = ef * rf * W[a, i + 2, j + 2, k + 2]
+
+
 # ---------------------------------------------------------------------------- explicit terms
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
+def edge_coordinates(c, x, y, z):
+    """(p, s, t) of the point (x, y, z) with p along axis ``c``, s along (c + 1) % 3, t along (c + 2) % 3: the
+    inverse of ``at``."""
+    if c == 0:
+        return x, y, z
+    if c == 1:
+        return y, z, x
+    return z, x, y
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
 def stresses(W, E, mu, hx, hy, hz, S, T, nx, ny, nz):
     """The stresses of ε τ_g (Hoomans 1996 eq. 48, λ_g = 0; the sign of the stress on the gas) that
     ``explicit_momentum`` differences: S[d] = ε μ (2 ∂w_d/∂x_d − 2/3 ∇·u) at the cells −1..n_d along d
     (the others interior), and on every cell edge T[c] = ε_e μ (∂w_a/∂x_b + ∂w_b/∂x_a), ε_e the mean of
-    the four cells around the edge."""
+    the four cells around the edge. Rows (i, j) on Numba's threads (each entry written by one point)."""
     ihx, ihy, ihz = 1.0 / hx, 1.0 / hy, 1.0 / hz
-    for d in range(3):
-        ex, ey, ez = unit(d)
-        for i in range(-ex, nx + ex):
-            for j in range(-ey, ny + ey):
-                for k in range(-ez, nz + ez):
-                    du = (W[0, i + 3, j + 2, k + 2] - W[0, i + 2, j + 2, k + 2]) * ihx
-                    dv = (W[1, i + 2, j + 3, k + 2] - W[1, i + 2, j + 2, k + 2]) * ihy
-                    dw = (W[2, i + 2, j + 2, k + 3] - W[2, i + 2, j + 2, k + 2]) * ihz
-                    own = du if d == 0 else (dv if d == 1 else dw)
-                    third = (2.0 / 3.0) * (du + dv + dw)
-                    S[d, i + 1, j + 1, k + 1] = E[i + 1, j + 1, k + 1] * mu * (2.0 * own - third)
-    N = (nx, ny, nz)
+    for ij in prange((nx + 2) * (ny + 2)):
+        i = ij // (ny + 2) - 1
+        j = ij - (i + 1) * (ny + 2) - 1
+        for d in range(3):
+            ex, ey, ez = unit(d)
+            if i < -ex or i >= nx + ex or j < -ey or j >= ny + ey:
+                continue
+            for k in range(-ez, nz + ez):
+                du = (W[0, i + 3, j + 2, k + 2] - W[0, i + 2, j + 2, k + 2]) * ihx
+                dv = (W[1, i + 2, j + 3, k + 2] - W[1, i + 2, j + 2, k + 2]) * ihy
+                dw = (W[2, i + 2, j + 2, k + 3] - W[2, i + 2, j + 2, k + 2]) * ihz
+                own = du if d == 0 else (dv if d == 1 else dw)
+                third = (2.0 / 3.0) * (du + dv + dw)
+                S[d, i + 1, j + 1, k + 1] = E[i + 1, j + 1, k + 1] * mu * (2.0 * own - third)
     ih = (ihx, ihy, ihz)
-    for c in range(3):
-        a, b = (c + 1) % 3, (c + 2) % 3
-        for pc in range(N[c]):
-            for pa in range(N[a] + 1):
-                for pb in range(N[b] + 1):
-                    dadb = (W[a][at(c, pc + 2, pa + 2, pb + 2)] - W[a][at(c, pc + 2, pa + 2, pb + 1)]) * ih[b]
-                    dbda = (W[b][at(c, pc + 2, pa + 2, pb + 2)] - W[b][at(c, pc + 2, pa + 1, pb + 2)]) * ih[a]
-                    ec = 0.25 * (E[at(c, pc + 1, pa, pb)] + E[at(c, pc + 1, pa + 1, pb)]
-                                 + E[at(c, pc + 1, pa, pb + 1)] + E[at(c, pc + 1, pa + 1, pb + 1)])
-                    T[c][at(c, pc, pa, pb)] = ec * mu * (dadb + dbda)
+    for xy in prange((nx + 1) * (ny + 1)):
+        x = xy // (ny + 1)
+        y = xy - x * (ny + 1)
+        for c in range(3):  # edges along c: N[c] of them along c, N + 1 face lines across
+            if x >= nx + (c != 0) or y >= ny + (c != 1):
+                continue
+            a, b = (c + 1) % 3, (c + 2) % 3
+            for z in range(nz + (c != 2)):
+                pc, pa, pb = edge_coordinates(c, x, y, z)
+                dadb = (W[a][at(c, pc + 2, pa + 2, pb + 2)] - W[a][at(c, pc + 2, pa + 2, pb + 1)]) * ih[b]
+                dbda = (W[b][at(c, pc + 2, pa + 2, pb + 2)] - W[b][at(c, pc + 2, pa + 1, pb + 2)]) * ih[a]
+                ec = 0.25 * (E[at(c, pc + 1, pa, pb)] + E[at(c, pc + 1, pa + 1, pb)]
+                             + E[at(c, pc + 1, pa, pb + 1)] + E[at(c, pc + 1, pa + 1, pb + 1)])
+                T[c, x, y, z] = ec * mu * (dadb + dbda)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", parallel=True)
 def explicit_momentum(W, Q, C, K, F, S, T, fpar, ipar):
     """Explicit part of the momentum balance (Hoomans 1996 eq. 43) on every solved face [N m^-3]:
     F[F_EX] = −[∇·(ερ w u) − w ∇·(ερ u)] − ∇·(ε τ_g), the convection in advective form (the mass fluxes Q
     of the continuity equation, averaged onto the faces of the face's control volume; face velocities
-    upwind or TVD, ``_operators.face_value``) and the viscous stress of eq. 48 (``stresses``)."""
+    upwind or TVD, ``_operators.face_value``) and the viscous stress of eq. 48 (``stresses``). The face rows
+    (i, j) of all three axes on Numba's threads."""
     nx, ny, nz, scheme = ipar[I_N], ipar[I_N + 1], ipar[I_N + 2], ipar[I_SCHEME]
     hx, hy, hz = fpar[FP_H], fpar[FP_H + 1], fpar[FP_H + 2]
     stresses(W, C[C_E], fpar[FP_MU], hx, hy, hz, S, T, nx, ny, nz)
     ih = (1.0 / hx, 1.0 / hy, 1.0 / hz)
-    for a in range(3):
-        ax, ay, az = unit(a)
-        kind, EX = K[K_KIND, a], F[F_EX, a]
-        for i in range(nx + ax):
-            for j in range(ny + ay):
-                for k in range(nz + az):
-                    if kind[i, j, k] != SOLVED:
-                        EX[i, j, k] = 0.0
-                        continue
-                    I, J, L = i + 2, j + 2, k + 2
-                    wp = W[a, I, J, L]
-                    adv = 0.0
-                    visc = 0.0
-                    for d in range(3):
-                        dx, dy, dz = unit(d)
-                        if d == a:
-                            fp = 0.5 * (Q[a, I, J, L] + Q[a, I + dx, J + dy, L + dz])
-                            fm = 0.5 * (Q[a, I - dx, J - dy, L - dz] + Q[a, I, J, L])
-                            visc += (S[a, i + 1, j + 1, k + 1] - S[a, i + 1 - dx, j + 1 - dy, k + 1 - dz]) * ih[a]
-                        else:
-                            fp = 0.5 * (Q[d, I - ax + dx, J - ay + dy, L - az + dz] + Q[d, I + dx, J + dy, L + dz])
-                            fm = 0.5 * (Q[d, I - ax, J - ay, L - az] + Q[d, I, J, L])
-                            c = 3 - a - d
-                            visc += (T[c, i + dx, j + dy, k + dz] - T[c, i, j, k]) * ih[d]
-                        wpp = face_value(fp, W[a, I - dx, J - dy, L - dz], wp, W[a, I + dx, J + dy, L + dz],
-                                         W[a, I + 2 * dx, J + 2 * dy, L + 2 * dz], scheme)
-                        wm = face_value(fm, W[a, I - 2 * dx, J - 2 * dy, L - 2 * dz], W[a, I - dx, J - dy, L - dz],
-                                        wp, W[a, I + dx, J + dy, L + dz], scheme)
-                        adv += (fp * (wpp - wp) - fm * (wm - wp)) * ih[d]
-                    EX[i, j, k] = -adv + visc
+    for ij in prange((nx + 1) * (ny + 1)):
+        i = ij // (ny + 1)
+        j = ij - i * (ny + 1)
+        for a in range(3):
+            ax, ay, az = unit(a)
+            if i >= nx + ax or j >= ny + ay:
+                continue
+            for k in range(nz + az):
+                if K[K_KIND, a, i, j, k] != SOLVED:
+                    F[F_EX, a, i, j, k] = 0.0
+                    continue
+                I, J, L = i + 2, j + 2, k + 2
+                wp = W[a, I, J, L]
+                adv = 0.0
+                visc = 0.0
+                for d in range(3):
+                    dx, dy, dz = unit(d)
+                    if d == a:
+                        fp = 0.5 * (Q[a, I, J, L] + Q[a, I + dx, J + dy, L + dz])
+                        fm = 0.5 * (Q[a, I - dx, J - dy, L - dz] + Q[a, I, J, L])
+                        visc += (S[a, i + 1, j + 1, k + 1] - S[a, i + 1 - dx, j + 1 - dy, k + 1 - dz]) * ih[a]
+                    else:
+                        fp = 0.5 * (Q[d, I - ax + dx, J - ay + dy, L - az + dz] + Q[d, I + dx, J + dy, L + dz])
+                        fm = 0.5 * (Q[d, I - ax, J - ay, L - az] + Q[d, I, J, L])
+                        c = 3 - a - d
+                        visc += (T[c, i + dx, j + dy, k + dz] - T[c, i, j, k]) * ih[d]
+                    wpp = face_value(fp, W[a, I - dx, J - dy, L - dz], wp, W[a, I + dx, J + dy, L + dz],
+                                     W[a, I + 2 * dx, J + 2 * dy, L + 2 * dz], scheme)
+                    wm = face_value(fm, W[a, I - 2 * dx, J - 2 * dy, L - 2 * dz], W[a, I - dx, J - dy, L - dz],
+                                    wp, W[a, I + dx, J + dy, L + dz], scheme)
+                    adv += (fp * (wpp - wp) - fm * (wm - wp)) * ih[d]
+                F[F_EX, a, i, j, k] = -adv + visc
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def _outflow_face_flows(F, K, C, fpar, nx, ny, nz):
+    """Outward mass flux through the interior face next to each continuous-outflow face, at t (zero
+    normal gradient), into F[F_WOUT] (0 on the other faces); face rows (i, j) on Numba's threads."""
+    RHO, E = C[C_RHO], C[C_E]
+    for ij in prange((nx + 1) * (ny + 1)):
+        i = ij // (ny + 1)
+        j = ij - i * (ny + 1)
+        for a in range(3):
+            ex, ey, ez = unit(a)
+            if i >= nx + ex or j >= ny + ey:
+                continue
+            area = fpar[FP_A + a]
+            for k in range(nz + ez):
+                if K[K_KIND, a, i, j, k] != OUTFLOW_FACE:
+                    F[F_WOUT, a, i, j, k] = 0.0
+                    continue
+                s = K[K_SIGN, a, i, j, k]
+                w = F[F_OLD, a, i + s * ex, j + s * ey, k + s * ez]
+                if s > 0:  # the interior cell
+                    c0, c1, c2 = i + 1, j + 1, k + 1
+                else:
+                    c0, c1, c2 = i + 1 - ex, j + 1 - ey, k + 1 - ez
+                F[F_WOUT, a, i, j, k] = -s * w * E[c0, c1, c2] * RHO[c0, c1, c2] * area
 
 
 @njit(cache=True, error_model="numpy")
 def _outflow_shares(F, K, C, fpar, total, nx, ny, nz):
-    """Outward mass flux through the interior face next to each continuous-outflow face, at t (zero
-    normal gradient), into F[F_WOUT]; adds them to ``total`` = [sum, sum of |.|, area]."""
-    RHO, E = C[C_RHO], C[C_E]
+    """Outward mass flux through the interior face next to each continuous-outflow face, at t, into F[F_WOUT]
+    (``_outflow_face_flows``); adds them to ``total`` = [sum, sum of |.|, area] in face order (serial)."""
+    _outflow_face_flows(F, K, C, fpar, nx, ny, nz)
     for a in range(3):
         ex, ey, ez = unit(a)
         area = fpar[FP_A + a]
-        kind, sign, old, share = K[K_KIND, a], K[K_SIGN, a], F[F_OLD, a], F[F_WOUT, a]
+        kind, share = K[K_KIND, a], F[F_WOUT, a]
         for i in range(nx + ex):
             for j in range(ny + ey):
                 for k in range(nz + ez):
-                    if kind[i, j, k] != OUTFLOW_FACE:
-                        share[i, j, k] = 0.0
-                        continue
-                    s = sign[i, j, k]
-                    w = old[i + s * ex, j + s * ey, k + s * ez]
-                    if s > 0:  # the interior cell
-                        c0, c1, c2 = i + 1, j + 1, k + 1
-                    else:
-                        c0, c1, c2 = i + 1 - ex, j + 1 - ey, k + 1 - ez
-                    f = -s * w * E[c0, c1, c2] * RHO[c0, c1, c2] * area
-                    share[i, j, k] = f
-                    total[0] += f
-                    total[1] += abs(f)
-                    total[2] += area
+                    if kind[i, j, k] == OUTFLOW_FACE:
+                        f = share[i, j, k]
+                        total[0] += f
+                        total[1] += abs(f)
+                        total[2] += area
 
 
 @njit(cache=True, error_model="numpy")
@@ -352,26 +399,56 @@ def _normalise_shares(F, K, fpar, total):
                         share[i, j, k] = share[i, j, k] / total[0] if by_flow else area / total[2]
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", parallel=True)
 def _face_constants(C, F, K, fpar, idt, nx, ny, nz):
     """Per step: ε_f at t + dt (``face_voidage``) and the pressure term's ε_p,f = ε_f, X1 = w_old/dt + g,
-    X2 = explicit terms + β u_s + source."""
+    X2 = explicit terms + β u_s + source. Face rows (i, j) on Numba's threads."""
     E = C[C_E]
-    for a in range(3):
-        ex, ey, ez = unit(a)
-        g = fpar[FP_G + a]
-        kind, sign = K[K_KIND, a], K[K_SIGN, a]
-        EF, X1, X2, old, exp_, rhs, EP = (F[F_EF, a], F[F_X1, a], F[F_X2, a], F[F_OLD, a], F[F_EX, a], F[F_RHS, a],
-                                          F[F_EP, a])
-        for i in range(nx + ex):
-            for j in range(ny + ey):
-                for k in range(nz + ez):
-                    ef = face_voidage(E, i + 1 - ex, j + 1 - ey, k + 1 - ez, i + 1, j + 1, k + 1, kind[i, j, k],
-                                      sign[i, j, k])
-                    EF[i, j, k] = ef
-                    EP[i, j, k] = ef
-                    X1[i, j, k] = old[i, j, k] * idt + g
-                    X2[i, j, k] = exp_[i, j, k] + rhs[i, j, k]
+    for ij in prange((nx + 1) * (ny + 1)):
+        i = ij // (ny + 1)
+        j = ij - i * (ny + 1)
+        for a in range(3):
+            ex, ey, ez = unit(a)
+            if i >= nx + ex or j >= ny + ey:
+                continue
+            g = fpar[FP_G + a]
+            for k in range(nz + ez):
+                ef = face_voidage(E, i + 1 - ex, j + 1 - ey, k + 1 - ez, i + 1, j + 1, k + 1, K[K_KIND, a, i, j, k],
+                                  K[K_SIGN, a, i, j, k])
+                F[F_EF, a, i, j, k] = ef
+                F[F_EP, a, i, j, k] = ef
+                F[F_X1, a, i, j, k] = F[F_OLD, a, i, j, k] * idt + g
+                F[F_X2, a, i, j, k] = F[F_EX, a, i, j, k] + F[F_RHS, a, i, j, k]
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def _load_state(p, rho, u, v, w, eps_old, W, C, F, p_ref, nx, ny, nz):
+    """p − p_ref, ε and ερ at t into the interior cells of C; u, v, w into W and F[F_OLD]; rows (i, j) on
+    Numba's threads."""
+    for ij in prange((nx + 1) * (ny + 1)):
+        i = ij // (ny + 1)
+        j = ij - i * (ny + 1)
+        if i < nx and j < ny:
+            for k in range(nz):
+                C[C_P, i + 1, j + 1, k + 1] = p[i, j, k] - p_ref
+                C[C_E, i + 1, j + 1, k + 1] = eps_old[i, j, k]
+                C[C_RO_OLD, i + 1, j + 1, k + 1] = eps_old[i, j, k] * rho[i, j, k]
+        for a in range(3):
+            src = u if a == 0 else (v if a == 1 else w)
+            if i < src.shape[0] and j < src.shape[1]:
+                for k in range(src.shape[2]):
+                    W[a, i + 2, j + 2, k + 2] = src[i, j, k]
+                    F[F_OLD, a, i, j, k] = src[i, j, k]
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def _load_voidage(eps, C, nx, ny, nz):
+    """ε into the interior cells of C[C_E]; rows (i, j) on Numba's threads."""
+    for ij in prange(nx * ny):
+        i = ij // ny
+        j = ij - i * ny
+        for k in range(nz):
+            C[C_E, i + 1, j + 1, k + 1] = eps[i, j, k]
 
 
 @njit(cache=True, error_model="numpy")
@@ -381,22 +458,7 @@ def begin_step(p, rho, u, v, w, eps_old, eps_new, W, Q, C, F, K, S, T, flags, RU
     ``eps_new`` and the boundary cells at t + dt, and the per-step face constants. F[F_BETA] and F[F_RHS]
     must hold this step's β and β u_s + source on every face."""
     nx, ny, nz = ipar[I_N], ipar[I_N + 1], ipar[I_N + 2]
-    p_ref = fpar[FP_PREF]
-    P, E, RO = C[C_P], C[C_E], C[C_RO_OLD]
-    for i in range(nx):
-        for j in range(ny):
-            for k in range(nz):
-                P[i + 1, j + 1, k + 1] = p[i, j, k] - p_ref
-                E[i + 1, j + 1, k + 1] = eps_old[i, j, k]
-                RO[i + 1, j + 1, k + 1] = eps_old[i, j, k] * rho[i, j, k]
-    for a in range(3):
-        src = u if a == 0 else (v if a == 1 else w)
-        old = F[F_OLD, a]
-        for i in range(src.shape[0]):
-            for j in range(src.shape[1]):
-                for k in range(src.shape[2]):
-                    W[a, i + 2, j + 2, k + 2] = src[i, j, k]
-                    old[i, j, k] = src[i, j, k]
+    _load_state(p, rho, u, v, w, eps_old, W, C, F, fpar[FP_PREF], nx, ny, nz)
     boundary_cells(C, C[C_PFIX_OLD], flags, RULES, fpar, ipar)
     fill_face_ghosts(W, flags, nx, ny, nz)
     mass_fluxes(W, Q, C, K, flags, nx, ny, nz)
@@ -405,10 +467,7 @@ def begin_step(p, rho, u, v, w, eps_old, eps_new, W, Q, C, F, K, S, T, flags, RU
     _outflow_shares(F, K, C, fpar, total, nx, ny, nz)
     if total[2] > 0.0:
         _normalise_shares(F, K, fpar, total)
-    for i in range(nx):
-        for j in range(ny):
-            for k in range(nz):
-                E[i + 1, j + 1, k + 1] = eps_new[i, j, k]
+    _load_voidage(eps_new, C, nx, ny, nz)
     boundary_cells(C, C[C_PFIX], flags, RULES, fpar, ipar)
     _face_constants(C, F, K, fpar, 1.0 / fpar[FP_DT], nx, ny, nz)
 
@@ -419,24 +478,29 @@ def end_step(p, rho, u, v, w, eps, eps_new, W, C, flags, fpar, ipar):
     (p as absolute pressure, ε = eps_new)."""
     nx, ny, nz = ipar[I_N], ipar[I_N + 1], ipar[I_N + 2]
     fill_face_ghosts(W, flags, nx, ny, nz)
-    P, RHO = C[C_P], C[C_RHO]
-    p_ref = fpar[FP_PREF]
-    for i in range(nx):
-        for j in range(ny):
+    _store_state(p, rho, u, v, w, eps, eps_new, W, C, fpar[FP_PREF], nx, ny, nz)
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def _store_state(p, rho, u, v, w, eps, eps_new, W, C, p_ref, nx, ny, nz):
+    """The interior cells and faces into the state arrays (``end_step``); rows (i, j) on Numba's threads."""
+    for ij in prange((nx + 1) * (ny + 1)):
+        i = ij // (ny + 1)
+        j = ij - i * (ny + 1)
+        if i < nx and j < ny:
             for k in range(nz):
-                p[i, j, k] = P[i + 1, j + 1, k + 1] + p_ref
-                rho[i, j, k] = RHO[i + 1, j + 1, k + 1]
+                p[i, j, k] = C[C_P, i + 1, j + 1, k + 1] + p_ref
+                rho[i, j, k] = C[C_RHO, i + 1, j + 1, k + 1]
                 eps[i, j, k] = eps_new[i, j, k]
-    for a in range(3):
-        dst = u if a == 0 else (v if a == 1 else w)
-        for i in range(dst.shape[0]):
-            for j in range(dst.shape[1]):
+        for a in range(3):
+            dst = u if a == 0 else (v if a == 1 else w)
+            if i < dst.shape[0] and j < dst.shape[1]:
                 for k in range(dst.shape[2]):
                     dst[i, j, k] = W[a, i + 2, j + 2, k + 2]
 
 
 # ---------------------------------------------------------------------------- one iteration
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", parallel=True)
 def _face_fluxes(W, C, F, K, fpar, nx, ny, nz):
     """Momentum of every face at the current pressure and the mass fluxes A (ερ)_f w [kg/s] into F[F_FLUX]:
     0 on outflow faces (``_outflow`` adds theirs), periodic duplicates those of face 0. Solved faces::
@@ -444,37 +508,41 @@ def _face_fluxes(W, C, F, K, fpar, nx, ny, nz):
         (ερ)_f (w - w_old)/dt = ex - ε_f ∂p/∂x_a - β (w - w_s) + (ερ)_f g_a + source
         w = (m X1 + X2 - ε_p,f ∂p/∂x_a) / (m/dt + β),   m = ε_f ρ_f
 
-    Returns whether there are outflow faces."""
+    Returns whether there are outflow faces. The face rows (i, j) of all three axes on Numba's threads, then
+    the periodic duplicates."""
     P, RHO = C[C_P], C[C_RHO]
     idt = 1.0 / fpar[FP_DT]
-    has_outflow = False
+    n_outflow = 0
+    for ij in prange((nx + 1) * (ny + 1)):
+        i = ij // (ny + 1)
+        j = ij - i * (ny + 1)
+        for a in range(3):
+            ex, ey, ez = unit(a)
+            if i >= nx + ex or j >= ny + ey:
+                continue
+            ih = 1.0 / fpar[FP_H + a]
+            area = fpar[FP_A + a]
+            for k in range(nz + ez):
+                kk = K[K_KIND, a, i, j, k]
+                l0, l1, l2 = i + 1 - ex, j + 1 - ey, k + 1 - ez
+                rf = 0.5 * (RHO[l0, l1, l2] + RHO[i + 1, j + 1, k + 1])
+                if kk == SOLVED:
+                    ef = F[F_EF, a, i, j, k]
+                    m = ef * rf
+                    w = (m * F[F_X1, a, i, j, k] + F[F_X2, a, i, j, k]
+                         - F[F_EP, a, i, j, k] * (P[i + 1, j + 1, k + 1] - P[l0, l1, l2]) * ih) / (
+                        m * idt + F[F_BETA, a, i, j, k])
+                    W[a, i + 2, j + 2, k + 2] = w
+                    F[F_FLUX, a, i, j, k] = area * ef * rf * w
+                elif kk == FIXED:
+                    w = F[F_FIX, a, i, j, k]
+                    W[a, i + 2, j + 2, k + 2] = w
+                    F[F_FLUX, a, i, j, k] = area * F[F_EF, a, i, j, k] * rf * w
+                elif kk == OUTFLOW_FACE:
+                    F[F_FLUX, a, i, j, k] = 0.0
+                    n_outflow += 1
     for a in range(3):
-        ex, ey, ez = unit(a)
-        ih = 1.0 / fpar[FP_H + a]
-        area = fpar[FP_A + a]
-        kind = K[K_KIND, a]
-        EF, X1, X2, beta, fix, FL, EP = (F[F_EF, a], F[F_X1, a], F[F_X2, a], F[F_BETA, a], F[F_FIX, a], F[F_FLUX, a],
-                                         F[F_EP, a])
-        for i in range(nx + ex):
-            for j in range(ny + ey):
-                for k in range(nz + ez):
-                    kk = kind[i, j, k]
-                    l0, l1, l2 = i + 1 - ex, j + 1 - ey, k + 1 - ez
-                    rf = 0.5 * (RHO[l0, l1, l2] + RHO[i + 1, j + 1, k + 1])
-                    if kk == SOLVED:
-                        ef = EF[i, j, k]
-                        m = ef * rf
-                        w = (m * X1[i, j, k] + X2[i, j, k]
-                             - EP[i, j, k] * (P[i + 1, j + 1, k + 1] - P[l0, l1, l2]) * ih) / (m * idt + beta[i, j, k])
-                        W[a, i + 2, j + 2, k + 2] = w
-                        FL[i, j, k] = area * ef * rf * w
-                    elif kk == FIXED:
-                        w = fix[i, j, k]
-                        W[a, i + 2, j + 2, k + 2] = w
-                        FL[i, j, k] = area * EF[i, j, k] * rf * w
-                    elif kk == OUTFLOW_FACE:
-                        FL[i, j, k] = 0.0
-                        has_outflow = True
+        kind, FL = K[K_KIND, a], F[F_FLUX, a]
         na = nx if a == 0 else (ny if a == 1 else nz)
         nb, nc = (ny, nz) if a == 0 else ((nz, nx) if a == 1 else (nx, ny))
         for s in range(nb):
@@ -482,7 +550,7 @@ def _face_fluxes(W, C, F, K, fpar, nx, ny, nz):
                 g = at(a, na, s, t)
                 if kind[g] == COPY:
                     FL[g] = FL[at(a, 0, s, t)]
-    return has_outflow
+    return n_outflow > 0
 
 
 @njit(cache=True, error_model="numpy")
@@ -550,6 +618,21 @@ def _outflow(W, C, F, K, row_of, R, fpar, need, nx, ny, nz):
     return inflow, outflow
 
 
+@njit(cache=True, error_model="numpy", parallel=True)
+def _cell_residuals(C, F, R, vdt, nx, ny, nz):
+    """R_c = V [(ερ)_c - (ερ)_c,old]/dt + Σ_faces A (ερ)_f w_out of every cell (``predict_residual``), row
+    (i ny + j) nz + k; rows (i, j) on Numba's threads."""
+    for ij in prange(nx * ny):
+        i = ij // ny
+        j = ij - i * ny
+        for k in range(nz):
+            er = C[C_E, i + 1, j + 1, k + 1] * C[C_RHO, i + 1, j + 1, k + 1]
+            a = vdt * (er - C[C_RO_OLD, i + 1, j + 1, k + 1])
+            R[(i * ny + j) * nz + k] = a + ((F[F_FLUX, 0, i + 1, j, k] - F[F_FLUX, 0, i, j, k])
+                                            + (F[F_FLUX, 1, i, j + 1, k] - F[F_FLUX, 1, i, j, k])
+                                            + (F[F_FLUX, 2, i, j, k + 1] - F[F_FLUX, 2, i, j, k]))
+
+
 @njit(cache=True, error_model="numpy")
 def predict_residual(W, C, F, K, row_of, R, fpar, ipar, out):
     """Face velocities from the momentum balance at the current pressure (``_face_fluxes``), then the cell
@@ -565,18 +648,16 @@ def predict_residual(W, C, F, K, row_of, R, fpar, ipar, out):
     vol = fpar[FP_VOL]
     RHO, E, RO = C[C_RHO], C[C_E], C[C_RO_OLD]
     has_outflow = _face_fluxes(W, C, F, K, fpar, nx, ny, nz)
-    FLX, FLY, FLZ = F[F_FLUX, 0], F[F_FLUX, 1], F[F_FLUX, 2]
+    vdt = vol * idt
+    _cell_residuals(C, F, R, vdt, nx, ny, nz)
     acc = 0.0
     acc_abs = 0.0
     mass = 0.0
-    vdt = vol * idt
-    for i in range(nx):
+    for i in range(nx):  # the sums in cell order (serial): bitwise those of one thread
         for j in range(ny):
             for k in range(nz):
                 er = E[i + 1, j + 1, k + 1] * RHO[i + 1, j + 1, k + 1]
                 a = vdt * (er - RO[i + 1, j + 1, k + 1])
-                R[(i * ny + j) * nz + k] = a + ((FLX[i + 1, j, k] - FLX[i, j, k]) + (FLY[i, j + 1, k] - FLY[i, j, k])
-                                                + (FLZ[i, j, k + 1] - FLZ[i, j, k]))
                 acc += a
                 acc_abs += abs(a)
                 mass += er
@@ -668,15 +749,22 @@ def assemble_pressure(data, diag_pos, pos, pin_pos, W, C, F, K, fpar, ipar):
         data[pin_diag] = 1.0
 
 
+@njit(cache=True, error_model="numpy", parallel=True)
+def _add_correction(C, dp, nx, ny, nz):
+    """p += p' in the interior cells (``correct_pressure``); rows (i, j) on Numba's threads."""
+    for ij in prange(nx * ny):
+        i = ij // ny
+        j = ij - i * ny
+        for k in range(nz):
+            C[C_P, i + 1, j + 1, k + 1] += dp[(i * ny + j) * nz + k]
+
+
 @njit(cache=True, error_model="numpy")
 def correct_pressure(C, dp, flags, RULES, fpar, ipar):
     """p += p' in every cell (p'_row of cell (i, j, k) at (i ny + j) nz + k), then the boundary cells of
     the pressure and the density everywhere."""
     nx, ny, nz = ipar[I_N], ipar[I_N + 1], ipar[I_N + 2]
     P = C[C_P]
-    for i in range(nx):
-        for j in range(ny):
-            for k in range(nz):
-                P[i + 1, j + 1, k + 1] += dp[(i * ny + j) * nz + k]
+    _add_correction(C, dp, nx, ny, nz)
     fill_centre_ghosts(P, flags, RULES[RULE_P], C[C_PFIX], nx, ny, nz)
     update_density(C, fpar[FP_COMP], fpar[FP_RHOC], fpar[FP_PREF])

@@ -243,7 +243,7 @@ def _face_ghost_lines(W, flags, a, q, s0, s1, nx, ny, nz):
     n = N[d]
     ext1 = N[e1] + 4 + (1 if e1 == a else 0)
     ext2 = N[e2] + 4 + (1 if e2 == a else 0)
-    for s in range(s0, min(s1, ext1)):
+    for s in range(max(s0, 0), min(s1, ext1)):
         cs = min(max(s - 2, 0), N[e1] - 1) + 1
         for t in range(ext2):
             ct = min(max(t - 2, 0), N[e2] - 1) + 1
@@ -287,7 +287,7 @@ def _density_threads(C, rho_factor, rho_const, p_ref):
 def _density_planes(i0, i1, C, rho_factor, rho_const, p_ref):
     """``update_density`` on the padded x planes i0 <= i < i1."""
     P, RHO = C[C_P], C[C_RHO]
-    for i in range(i0, i1):
+    for i in range(max(i0, 0), i1):
         for j in range(P.shape[1]):
             for k in range(P.shape[2]):
                 RHO[i, j, k] = rho_factor * (P[i, j, k] + p_ref) if rho_factor != 0.0 else rho_const
@@ -336,7 +336,7 @@ def _mass_flux_planes(i0, i1, W, Q, C, K, nx, ny, nz):
     for a in range(3):
         ex, ey, ez = unit(a)
         kind, sign = K[K_KIND, a], K[K_SIGN, a]
-        for i in range(i0, min(i1, nx + ex)):
+        for i in range(max(i0, 0), min(i1, nx + ex)):
             for j in range(ny + ey):
                 for k in range(nz + ez):
                     ef = face_voidage(E, i + 1 - ex, j + 1 - ey, k + 1 - ez, i + 1, j + 1, k + 1, kind[i, j, k],
@@ -425,7 +425,7 @@ def _explicit_planes(i0, i1, W, Q, K, F, S, T, hx, hy, hz, scheme, nx, ny, nz):
     for a in range(3):
         ax, ay, az = unit(a)
         kind, EX = K[K_KIND, a], F[F_EX, a]
-        for i in range(i0, min(i1, nx + ax)):
+        for i in range(max(i0, 0), min(i1, nx + ax)):
             for j in range(ny + ay):
                 for k in range(nz + az):
                     if kind[i, j, k] != SOLVED:
@@ -492,7 +492,7 @@ def _outflow_flow_planes(i0, i1, F, K, C, fpar, nx, ny, nz):
         ex, ey, ez = unit(a)
         area = fpar[FP_A + a]
         kind, sign, old, share = K[K_KIND, a], K[K_SIGN, a], F[F_OLD, a], F[F_WOUT, a]
-        for i in range(i0, min(i1, nx + ex)):
+        for i in range(max(i0, 0), min(i1, nx + ex)):
             for j in range(ny + ey):
                 for k in range(nz + ez):
                     if kind[i, j, k] != OUTFLOW_FACE:
@@ -547,7 +547,7 @@ def _face_constant_planes(i0, i1, C, F, K, fpar, idt, nx, ny, nz):
         kind, sign = K[K_KIND, a], K[K_SIGN, a]
         EF, X1, X2, old, exp_, rhs, EP = (F[F_EF, a], F[F_X1, a], F[F_X2, a], F[F_OLD, a], F[F_EX, a], F[F_RHS, a],
                                           F[F_EP, a])
-        for i in range(i0, min(i1, nx + ex)):
+        for i in range(max(i0, 0), min(i1, nx + ex)):
             for j in range(ny + ey):
                 for k in range(nz + ez):
                     ef = face_voidage(E, i + 1 - ex, j + 1 - ey, k + 1 - ez, i + 1, j + 1, k + 1, kind[i, j, k],
@@ -569,7 +569,7 @@ def _load_threads(p, rho, u, v, w, eps_old, W, C, F, p_ref, nx):
 def _load_planes(i0, i1, p, rho, u, v, w, eps_old, W, C, F, p_ref):
     """The state at t into C (p − p_ref, ε, ερ), W and F[F_OLD], x planes i0 <= i < i1."""
     P, E, RO = C[C_P], C[C_E], C[C_RO_OLD]
-    for i in range(i0, min(i1, p.shape[0])):
+    for i in range(max(i0, 0), min(i1, p.shape[0])):
         for j in range(p.shape[1]):
             for k in range(p.shape[2]):
                 P[i + 1, j + 1, k + 1] = p[i, j, k] - p_ref
@@ -578,7 +578,7 @@ def _load_planes(i0, i1, p, rho, u, v, w, eps_old, W, C, F, p_ref):
     for a in range(3):
         src = u if a == 0 else (v if a == 1 else w)
         old = F[F_OLD, a]
-        for i in range(i0, min(i1, src.shape[0])):
+        for i in range(max(i0, 0), min(i1, src.shape[0])):
             for j in range(src.shape[1]):
                 for k in range(src.shape[2]):
                     W[a, i + 2, j + 2, k + 2] = src[i, j, k]
@@ -596,7 +596,7 @@ def _voidage_threads(eps, C, nx):
 def _voidage_planes(i0, i1, eps, C):
     """ε into the interior cells of C[C_E], x planes i0 <= i < i1."""
     E = C[C_E]
-    for i in range(i0, i1):
+    for i in range(max(i0, 0), i1):
         for j in range(eps.shape[1]):
             for k in range(eps.shape[2]):
                 E[i + 1, j + 1, k + 1] = eps[i, j, k]
@@ -653,7 +653,7 @@ def _store_threads(p, rho, u, v, w, eps, eps_new, W, C, p_ref, nx):
 def _store_planes(i0, i1, p, rho, u, v, w, eps, eps_new, W, C, p_ref):
     """The fields at t + dt into the state arrays (``end_step``), x planes i0 <= i < i1."""
     P, RHO = C[C_P], C[C_RHO]
-    for i in range(i0, min(i1, p.shape[0])):
+    for i in range(max(i0, 0), min(i1, p.shape[0])):
         for j in range(p.shape[1]):
             for k in range(p.shape[2]):
                 p[i, j, k] = P[i + 1, j + 1, k + 1] + p_ref
@@ -661,7 +661,7 @@ def _store_planes(i0, i1, p, rho, u, v, w, eps, eps_new, W, C, p_ref):
                 eps[i, j, k] = eps_new[i, j, k]
     for a in range(3):
         dst = u if a == 0 else (v if a == 1 else w)
-        for i in range(i0, min(i1, dst.shape[0])):
+        for i in range(max(i0, 0), min(i1, dst.shape[0])):
             for j in range(dst.shape[1]):
                 for k in range(dst.shape[2]):
                     dst[i, j, k] = W[a, i + 2, j + 2, k + 2]
@@ -716,7 +716,7 @@ def _face_flux_planes(i0, i1, W, C, F, K, fpar, nx, ny, nz):
         kind = K[K_KIND, a]
         EF, X1, X2, beta, fix, FL, EP = (F[F_EF, a], F[F_X1, a], F[F_X2, a], F[F_BETA, a], F[F_FIX, a], F[F_FLUX, a],
                                          F[F_EP, a])
-        for i in range(i0, min(i1, nx + ex)):
+        for i in range(max(i0, 0), min(i1, nx + ex)):
             for j in range(ny + ey):
                 for k in range(nz + ez):
                     kk = kind[i, j, k]
@@ -816,7 +816,7 @@ def _residual_planes(i0, i1, C, F, R, vdt, ny, nz):
     """The cell continuity residuals of ``predict_residual`` (without outflow faces), x planes i0 <= i < i1."""
     E, RHO, RO = C[C_E], C[C_RHO], C[C_RO_OLD]
     FLX, FLY, FLZ = F[F_FLUX, 0], F[F_FLUX, 1], F[F_FLUX, 2]
-    for i in range(i0, i1):
+    for i in range(max(i0, 0), i1):
         for j in range(ny):
             for k in range(nz):
                 er = E[i + 1, j + 1, k + 1] * RHO[i + 1, j + 1, k + 1]
@@ -956,7 +956,7 @@ def _correction_threads(C, dp, nx, ny, nz):
 def _correction_planes(i0, i1, C, dp, ny, nz):
     """p += p' in the interior cells of the x planes i0 <= i < i1 (``correct_pressure``)."""
     P = C[C_P]
-    for i in range(i0, i1):
+    for i in range(max(i0, 0), i1):
         for j in range(ny):
             for k in range(nz):
                 P[i + 1, j + 1, k + 1] += dp[(i * ny + j) * nz + k]

@@ -680,7 +680,7 @@ def _face_fluxes(W, C, F, K, fpar, nx, ny, nz, threads):
     if threads > 1:
         has_outflow = _face_flux_threads(W, C, F, K, fpar, nx, ny, nz) > 0
     else:
-        has_outflow = _face_flux_planes(0, nx + 1, W, C, F, K, fpar, nx, ny, nz) > 0
+        has_outflow = _face_flux_planes(0, nx + 1, W, C, F, K, fpar, nx, ny, nz)
     for a in range(3):
         kind, FL = K[K_KIND, a], F[F_FLUX, a]
         na = nx if a == 0 else (ny if a == 1 else nz)
@@ -698,17 +698,17 @@ def _face_flux_threads(W, C, F, K, fpar, nx, ny, nz):
     n_outflow = 0
     for ip in prange(nx + 1):
         i = np.int64(ip)  # signed: Numba's prange index is unsigned, and unsigned + signed is a float
-        n_outflow += _face_flux_planes(i, i + 1, W, C, F, K, fpar, nx, ny, nz)
+        n_outflow += 1 if _face_flux_planes(i, i + 1, W, C, F, K, fpar, nx, ny, nz) else 0
     return n_outflow
 
 
 @njit(cache=True, error_model="numpy")
 def _face_flux_planes(i0, i1, W, C, F, K, fpar, nx, ny, nz):
-    """``_face_fluxes`` on the faces with x index i0 <= i < i1 (not the periodic duplicates); returns the
-    number of outflow faces among them."""
+    """``_face_fluxes`` on the faces with x index i0 <= i < i1 (not the periodic duplicates); returns whether
+    there are outflow faces among them (a flag, not a count: a counter in the loop halves its speed)."""
     P, RHO = C[C_P], C[C_RHO]
     idt = 1.0 / fpar[FP_DT]
-    n_outflow = 0
+    has_outflow = False
     for a in range(3):
         ex, ey, ez = unit(a)
         ih = 1.0 / fpar[FP_H + a]
@@ -735,8 +735,8 @@ def _face_flux_planes(i0, i1, W, C, F, K, fpar, nx, ny, nz):
                         FL[i, j, k] = area * EF[i, j, k] * rf * w
                     elif kk == OUTFLOW_FACE:
                         FL[i, j, k] = 0.0
-                        n_outflow += 1
-    return n_outflow
+                        has_outflow = True
+    return has_outflow
 
 
 @njit(cache=True, error_model="numpy")

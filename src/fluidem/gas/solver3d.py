@@ -7,7 +7,9 @@ with ``w`` (z velocity on z-faces) from t to t + dt; the particle side enters on
 β with the solids velocity (``solids_u``, ``solids_v``, ``solids_w``) and an explicit momentum source
 (``source_u``, ``source_v``, ``source_w``). The loops over cells and faces are the compiled kernels of
 ``_solver3d_kernels``; here the Newton iterations of a step are driven one kernel call at a time (a few
-calls per iteration, nothing per cell).
+calls per iteration, nothing per cell). With more than one Numba thread in use the kernels' passes over the
+grid run one x plane per work item on the threads; the sums stay serial in grid order, so a step gives the
+same fields, bit for bit, on any number of threads (``tests/unit/test_gas3d_threads.py``).
 
 The pressure corrections are solved (``linear_solver``) by GMRES with an aggregation multigrid
 (``_multigrid3d_kernels``, 7-point stencil, 2 cells per coarse cell along the strongly coupled axes:

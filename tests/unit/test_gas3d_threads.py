@@ -101,3 +101,40 @@ def test_gas3d_steps_same_on_one_and_two_threads(name):
     for key in one:
         assert np.array_equal(one[key], two[key]), key
     assert all(s[0] > 0 for s in steps_one)  # the Newton iterations ran (and converged: advance raises otherwise)
+
+
+def test_bad_step_inputs_named():
+    """The checks that the step inputs pass through compiled loops (β, the voidages) and the state checks kept per
+    array object still refuse bad values with their messages, also after a good step."""
+    from fluidem.errors import CaseError
+
+    cells = (4, 5, 3)
+    grid = StaggeredGrid(cells=cells, size=tuple(0.01 * n for n in cells))
+    solver = GasSolver(grid, GasProperties(), walled(grid))
+    state = solver.initial_state(voidage=0.6)
+    shapes = [grid.face_shape(a) for a in range(3)]
+    beta = [np.full(s, 1e4) for s in shapes]
+    solver.advance(state, DT, 0.0, beta=tuple(beta))
+    bad = [b.copy() for b in beta]
+    bad[2][1, 2, 0] = -1.0
+    with pytest.raises(CaseError, match=r"gas beta: must be finite and >= 0 \[kg m\^-3 s\^-1\] on every face"):
+        solver.advance(state, DT, DT, beta=tuple(bad))
+    bad[2][1, 2, 0] = np.nan
+    with pytest.raises(CaseError, match="gas beta: must be finite"):
+        solver.advance(state, DT, DT, beta=tuple(bad))
+    with pytest.raises(CaseError, match="gas beta: must be finite"):
+        solver.advance(state, DT, DT, beta=-2.0)
+    eps = np.full(cells, 0.6)
+    eps[3, 4, 2] = 1.5
+    with pytest.raises(CaseError, match=r"gas voidage: value 1.5 outside \(0, 1\]"):
+        solver.advance(state, DT, DT, voidage=eps)
+    pv = [np.full(s, 0.5) for s in shapes]
+    pv[1][0, 0, 0] = 0.0
+    with pytest.raises(CaseError, match=r"gas pressure_voidage\[1\]: every face value must lie in \(0, 1\]"):
+        solver.advance(state, DT, DT, pressure_voidage=tuple(pv))
+    state.p = state.p.astype(np.float32)  # a new object: checked again
+    with pytest.raises(CaseError, match="gas state.p: must be a C-contiguous float64 array"):
+        solver.advance(state, DT, DT)
+    state.p = np.zeros((4, 5, 2))
+    with pytest.raises(CaseError, match=r"gas state.p: shape \(4, 5, 2\) does not match \(4, 5, 3\)"):
+        solver.advance(state, DT, DT)

@@ -14,6 +14,7 @@ import numba
 import numpy as np
 import pytest
 
+from fluidem.gas import _layout3d as lay
 from fluidem.gas import (
     Circle,
     FreeSlip,
@@ -62,6 +63,7 @@ def run(name):
     cells, sides, props, convection, moving = CASES[name]
     grid = StaggeredGrid(cells=cells, size=tuple(0.01 * n for n in cells))
     solver = GasSolver(grid, GasProperties(**props), sides(grid), convection=convection)
+    solver.parallel_min_cells = 0  # these small grids too on the threads
     X, Y, Z = grid.centres()
     eps = 0.45 + 0.5 * (Y / Y.max()) ** 2 * (0.8 + 0.2 * np.cos(7 * X / X.max()) * np.sin(3 * Z / Z.max() + 0.3))
     state = solver.initial_state(voidage=eps)
@@ -80,7 +82,7 @@ def run(name):
         steps.append((info.iterations, info.mass_residual, info.inflow_rate, info.outflow_rate, info.mass,
                       info.mass_change_rate, info.courant))
     fields = {k: getattr(state, k).copy() for k in ("p", "rho", "u", "v", "w", "voidage")}
-    return fields, steps
+    return fields, steps, int(solver._ipar[lay.I_THREADS])
 
 
 def with_threads(n, fn, *args):
@@ -95,8 +97,9 @@ def with_threads(n, fn, *args):
 
 @pytest.mark.parametrize("name", list(CASES))
 def test_gas3d_steps_same_on_one_and_two_threads(name):
-    one, steps_one = with_threads(1, run, name)
-    two, steps_two = with_threads(2, run, name)
+    one, steps_one, threads_one = with_threads(1, run, name)
+    two, steps_two, threads_two = with_threads(2, run, name)
+    assert (threads_one, threads_two) == (1, 2)  # the serial bodies, then the passes on two threads
     assert steps_one == steps_two  # iterations, mass residual, flows, mass, Courant number: ==
     for key in one:
         assert np.array_equal(one[key], two[key]), key

@@ -84,6 +84,10 @@ LINEAR_SOLVERS_3D = ("auto", "multigrid", "superlu")
 # correction left 1e-4 short, e.g. a closed box's hydrostatic profile off by 1e-9 Pa, not 1e-11)
 KRYLOV_REDUCTION_3D = 1e-5
 _LOW_SIDES = ("left", "bottom", "front")
+# grids of fewer cells run the kernels' passes serially on any number of threads: each parallel launch
+# costs tens of microseconds on a 2-core machine (``_threads.py``), as much as the passes of a
+# 1800-cell grid save on two threads (``benchmarks/README.md``, "3D coupled gas step")
+PARALLEL_MIN_CELLS = 5000
 
 
 class GasSolver3D(GasSolver):
@@ -276,6 +280,7 @@ class GasSolver3D(GasSolver):
         self._face_slices = tuple((a,) + tuple(slice(0, n) for n in self._face_shapes[a]) for a in range(3))
         self._none = np.zeros((0, 0, 0))  # "no array" for the input kernels
         self._state_ok = None  # the state arrays _check_state found right (references)
+        self.parallel_min_cells = PARALLEL_MIN_CELLS  # fewer cells: the kernels' passes serial on any threads
         choice = "multigrid" if linear_solver == "auto" else linear_solver
         self._mg = None
         if choice == "multigrid":
@@ -498,7 +503,8 @@ class GasSolver3D(GasSolver):
             self._set_boundary_values(t + dt)
         fpar, ipar, out = self._fpar, self._ipar, self._out
         fpar[lay.FP_DT] = dt
-        ipar[lay.I_THREADS] = numba.get_num_threads()  # the kernels' passes on that many threads (bitwise the same)
+        # the kernels' passes on that many threads (bitwise the same on any number)
+        ipar[lay.I_THREADS] = numba.get_num_threads() if self.R.size >= self.parallel_min_cells else 1
         K3.begin_step(state.p, state.rho, state.u, state.v, state.w, state.voidage, eps_new, self.W, self.Q, self.C,
                       self.F, self.K, self.S, self.T, self.flags, self.RULES, fpar, ipar)
         if pressure_voidage is not None:  # replaces the ε_f that begin_step gave the pressure term

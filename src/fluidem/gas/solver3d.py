@@ -84,10 +84,10 @@ LINEAR_SOLVERS_3D = ("auto", "multigrid", "superlu")
 # correction left 1e-4 short, e.g. a closed box's hydrostatic profile off by 1e-9 Pa, not 1e-11)
 KRYLOV_REDUCTION_3D = 1e-5
 _LOW_SIDES = ("left", "bottom", "front")
-# grids of fewer cells run the kernels' passes serially on any number of threads: each parallel launch
-# costs tens of microseconds on a 2-core machine (``_threads.py``), as much as the passes of a
-# 1800-cell grid save on two threads (``benchmarks/README.md``, "3D coupled gas step")
-PARALLEL_MIN_CELLS = 5000
+# grids of fewer cells run the kernels' passes serially on any number of threads: on a 2-core machine the
+# threaded passes saved nothing at 1800 cells, and lost at 1800 to 1e5 cells whenever another process
+# shared a core (``benchmarks/README.md``, "3D coupled gas step"); above, not yet measured on an idle machine
+PARALLEL_MIN_CELLS = 200_000
 
 
 class GasSolver3D(GasSolver):

@@ -66,9 +66,10 @@ N_FPAR = 15
 #   I_N       cells (nx, ny, nz), slots I_N .. I_N + 2
 #   I_SCHEME  convection scheme (``_operators.UPWIND``, ``TVD``)
 #   I_PIN     position of the diagonal entry of row 0 when the pressure level is pinned, else -1
+#   I_THREADS Numba threads in use, set every step: above 1 the kernels' passes over the grid run on them
 I_N = 0
-I_SCHEME, I_PIN = 3, 4
-N_IPAR = 5
+I_SCHEME, I_PIN, I_THREADS = 3, 4, 5
+N_IPAR = 6
 # out (N_OUT,) float64, diagnostics of the last residual:
 #   O_RES, O_QREF, O_IN, O_OUT, O_ACC, O_MASS as in ``_layout.py``
 O_RES, O_QREF, O_IN, O_OUT, O_ACC, O_MASS = range(6)

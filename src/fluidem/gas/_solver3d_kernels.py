@@ -20,8 +20,10 @@ Symbols inside kernels: ``E`` voidage ε, ``RHO`` gas density ρ_g, ``P`` pressu
 edges: ``T[c]`` the (a, b) component, a = (c + 1) % 3, b = (c + 2) % 3, on the edges along axis c,
 indexed by their face lines along a and b and their cell along c.
 """
+import math
+
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from ._layout3d import (
     C_E,
@@ -56,6 +58,7 @@ from ._layout3d import (
     I_N,
     I_PIN,
     I_SCHEME,
+    I_THREADS,
     K_KIND,
     K_SIGN,
     O_ACC,
@@ -81,6 +84,13 @@ from .grid import PERIODIC
 
 MASS_FLOOR = 1e-4  # share of (gas mass / dt) in the reference flow of the mass residual (as in 2D)
 
+# The passes over the grid run on Numba's threads when ``threads`` (ipar[I_THREADS], the solver's count of
+# Numba threads in use) is above 1: each ``*_threads`` kernel gives one x plane (or line) per work item to
+# its ``*_planes`` body, which otherwise runs once over all planes as a serial call (no parallel launch on
+# one thread). Each face, cell or edge is computed by the same code either way, and every sum (mass,
+# flows, residual norms) stays one serial loop in grid order, so the results are bitwise the same on
+# any number of threads.
+
 
 @njit(cache=True, inline="always")
 def at(a, p, s, t):
@@ -96,6 +106,48 @@ def at(a, p, s, t):
 def unit(a):
     """(1, 0, 0), (0, 1, 0) or (0, 0, 1): the unit offset of axis ``a``."""
     return int(a == 0), int(a == 1), int(a == 2)
+
+
+# ---------------------------------------------------------------------------- step inputs
+@njit(cache=True, error_model="numpy")
+def unit_interval(x):
+    """Whether every value of ``x`` (any shape) lies in (0, 1] (a NaN does not)."""
+    for v in x.flat:
+        if not (v > 0.0 and v <= 1.0):
+            return False
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def load_beta(F, a, b):
+    """F[F_BETA, a] = β [kg m^-3 s^-1] on the faces of axis ``a`` (``b`` a face array of that axis); returns
+    False, the faces before it written, at the first value that is not finite and ≥ 0."""
+    for i in range(b.shape[0]):
+        for j in range(b.shape[1]):
+            for k in range(b.shape[2]):
+                x = b[i, j, k]
+                if not (math.isfinite(x) and x >= 0.0):
+                    return False
+                F[F_BETA, a, i, j, k] = x
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def load_momentum_sources(F, a, us, source, n0, n1, n2):
+    """F[F_RHS, a] = β u_s + source [N/m^3] on the (n0, n1, n2) faces of axis ``a``, summed from 0 in that
+    order: ``us`` the solids velocity [m/s] (an empty array: no β u_s term), β from F[F_BETA, a], and
+    ``source`` the explicit momentum source (empty: none)."""
+    has_us = us.size > 0
+    has_source = source.size > 0
+    for i in range(n0):
+        for j in range(n1):
+            for k in range(n2):
+                r = 0.0
+                if has_us:
+                    r += F[F_BETA, a, i, j, k] * us[i, j, k]
+                if has_source:
+                    r += source[i, j, k]
+                F[F_RHS, a, i, j, k] = r
 
 
 # ---------------------------------------------------------------------------- ghosts
@@ -152,49 +204,90 @@ def fill_centre_ghosts(q, flags, rule, fixed, nx, ny, nz):
 
 
 @njit(cache=True, error_model="numpy")
-def fill_face_ghosts(W, flags, nx, ny, nz):
+def fill_face_ghosts(W, flags, nx, ny, nz, threads):
     """Ghost faces of a face-vector stack (velocity or mass flux) from the flags: for each direction a,
     the tangential ghost layers along the other two axes, then the normal ghost layers along a (and
     the periodic duplicate face n_a = face 0), each over the whole padded extent of the other axes
-    (ghost velocity per flag: ``_tangential``, ``_normal`` of the 2D kernels)."""
-    N = (nx, ny, nz)
-    for a in range(3):
-        Wa = W[a]
+    (ghost velocity per flag: ``_tangential``, ``_normal`` of the 2D kernels). The three passes one after
+    the other (the later ones read the ghost layers of the earlier); within a pass a line ``s`` writes only
+    its own ghost faces and reads only faces of its own line that the pass does not write, so the lines
+    of the three directions go to Numba's threads (``_face_ghost_threads``)."""
+    if threads > 1:
         for q in range(3):
-            d = (a + 1 + q) % 3  # the tangential axes first, the normal axis a last
-            e1, e2 = (d + 1) % 3, (d + 2) % 3
-            n = N[d]
-            ext1 = N[e1] + 4 + (1 if e1 == a else 0)
-            ext2 = N[e2] + 4 + (1 if e2 == a else 0)
-            for s in range(ext1):
-                cs = min(max(s - 2, 0), N[e1] - 1) + 1
-                for t in range(ext2):
-                    ct = min(max(t - 2, 0), N[e2] - 1) + 1
-                    flo = flags[at(d, 0, cs, ct)]
-                    fhi = flags[at(d, n + 1, cs, ct)]
-                    if d != a:
-                        for k in range(1, 3):
-                            Wa[at(d, 2 - k, s, t)] = _tangential(flo, Wa[at(d, 1 + k, s, t)],
-                                                                 Wa[at(d, 2 + (n - k) % n, s, t)])
-                            Wa[at(d, n + 1 + k, s, t)] = _tangential(fhi, Wa[at(d, n + 2 - k, s, t)],
-                                                                     Wa[at(d, 2 + (k - 1) % n, s, t)])
-                    else:
-                        if fhi == PERIODIC:
-                            Wa[at(d, n + 2, s, t)] = Wa[at(d, 2, s, t)]
-                        for k in range(1, 3):
-                            Wa[at(d, 2 - k, s, t)] = _normal(flo, Wa[at(d, 2, s, t)], Wa[at(d, 2 + k, s, t)],
-                                                             Wa[at(d, 2 + (n - k) % n, s, t)])
-                            Wa[at(d, n + 2 + k, s, t)] = _normal(fhi, Wa[at(d, n + 2, s, t)],
-                                                                 Wa[at(d, n + 2 - k, s, t)], Wa[at(d, 2 + k % n, s, t)])
+            _face_ghost_threads(W, flags, q, nx, ny, nz)
+    else:
+        m = max(nx, max(ny, nz)) + 5
+        for a in range(3):
+            for q in range(3):
+                _face_ghost_lines(W, flags, a, q, 0, m, nx, ny, nz)
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def _face_ghost_threads(W, flags, q, nx, ny, nz):
+    """Pass ``q`` of ``fill_face_ghosts``, one line of one direction per work item."""
+    m = max(nx, max(ny, nz)) + 5
+    for ip in prange(3 * m):
+        p = np.int64(ip)  # signed: Numba's prange index is unsigned, and unsigned + signed is a float
+        a = p // m
+        s = p - a * m
+        _face_ghost_lines(W, flags, a, q, s, s + 1, nx, ny, nz)
+
+
+@njit(cache=True, error_model="numpy")
+def _face_ghost_lines(W, flags, a, q, s0, s1, nx, ny, nz):
+    """Pass ``q`` of ``fill_face_ghosts`` for direction ``a``, lines s0 <= s < s1."""
+    N = (nx, ny, nz)
+    Wa = W[a]
+    d = (a + 1 + q) % 3  # the tangential axes first, the normal axis a last
+    e1, e2 = (d + 1) % 3, (d + 2) % 3
+    n = N[d]
+    ext1 = N[e1] + 4 + (1 if e1 == a else 0)
+    ext2 = N[e2] + 4 + (1 if e2 == a else 0)
+    for s in range(max(s0, 0), min(s1, ext1)):
+        cs = min(max(s - 2, 0), N[e1] - 1) + 1
+        for t in range(ext2):
+            ct = min(max(t - 2, 0), N[e2] - 1) + 1
+            flo = flags[at(d, 0, cs, ct)]
+            fhi = flags[at(d, n + 1, cs, ct)]
+            if d != a:
+                for k in range(1, 3):
+                    Wa[at(d, 2 - k, s, t)] = _tangential(flo, Wa[at(d, 1 + k, s, t)],
+                                                         Wa[at(d, 2 + (n - k) % n, s, t)])
+                    Wa[at(d, n + 1 + k, s, t)] = _tangential(fhi, Wa[at(d, n + 2 - k, s, t)],
+                                                             Wa[at(d, 2 + (k - 1) % n, s, t)])
+            else:
+                if fhi == PERIODIC:
+                    Wa[at(d, n + 2, s, t)] = Wa[at(d, 2, s, t)]
+                for k in range(1, 3):
+                    Wa[at(d, 2 - k, s, t)] = _normal(flo, Wa[at(d, 2, s, t)], Wa[at(d, 2 + k, s, t)],
+                                                     Wa[at(d, 2 + (n - k) % n, s, t)])
+                    Wa[at(d, n + 2 + k, s, t)] = _normal(fhi, Wa[at(d, n + 2, s, t)],
+                                                         Wa[at(d, n + 2 - k, s, t)], Wa[at(d, 2 + k % n, s, t)])
 
 
 # ---------------------------------------------------------------------------- centre values
 @njit(cache=True, error_model="numpy")
-def update_density(C, rho_factor, rho_const, p_ref):
+def update_density(C, rho_factor, rho_const, p_ref, threads):
     """ρ = (p' + p_ref) M/(RT) everywhere (Hoomans 1996 eq. 44; C[C_P] is the pressure relative to
     p_ref), or the constant density when rho_factor is 0."""
+    if threads > 1:
+        _density_threads(C, rho_factor, rho_const, p_ref)
+    else:
+        _density_planes(0, C.shape[1], C, rho_factor, rho_const, p_ref)
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def _density_threads(C, rho_factor, rho_const, p_ref):
+    for ip in prange(C.shape[1]):
+        i = np.int64(ip)  # signed: Numba's prange index is unsigned, and unsigned + signed is a float
+        _density_planes(i, i + 1, C, rho_factor, rho_const, p_ref)
+
+
+@njit(cache=True, error_model="numpy")
+def _density_planes(i0, i1, C, rho_factor, rho_const, p_ref):
+    """``update_density`` on the padded x planes i0 <= i < i1."""
     P, RHO = C[C_P], C[C_RHO]
-    for i in range(P.shape[0]):
+    for i in range(max(i0, 0), i1):
         for j in range(P.shape[1]):
             for k in range(P.shape[2]):
                 RHO[i, j, k] = rho_factor * (P[i, j, k] + p_ref) if rho_factor != 0.0 else rho_const
@@ -207,7 +300,7 @@ def boundary_cells(C, pfix, flags, RULES, fpar, ipar):
     nx, ny, nz = ipar[I_N], ipar[I_N + 1], ipar[I_N + 2]
     fill_centre_ghosts(C[C_E], flags, RULES[RULE_E], C[C_EFIX], nx, ny, nz)
     fill_centre_ghosts(C[C_P], flags, RULES[RULE_P], pfix, nx, ny, nz)
-    update_density(C, fpar[FP_COMP], fpar[FP_RHOC], fpar[FP_PREF])
+    update_density(C, fpar[FP_COMP], fpar[FP_RHOC], fpar[FP_PREF], ipar[I_THREADS])
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -220,33 +313,65 @@ def face_voidage(E, l0, l1, l2, r0, r1, r2, kind, sign):
 
 
 @njit(cache=True, error_model="numpy")
-def mass_fluxes(W, Q, C, K, flags, nx, ny, nz):
+def mass_fluxes(W, Q, C, K, flags, nx, ny, nz, threads):
     """Q = (ερ)_f w on the faces of every direction [kg m^-2 s^-1], ghosts filled like velocities."""
+    if threads > 1:
+        _mass_flux_threads(W, Q, C, K, nx, ny, nz)
+    else:
+        _mass_flux_planes(0, nx + 1, W, Q, C, K, nx, ny, nz)
+    fill_face_ghosts(Q, flags, nx, ny, nz, threads)
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def _mass_flux_threads(W, Q, C, K, nx, ny, nz):
+    for ip in prange(nx + 1):
+        i = np.int64(ip)  # signed: Numba's prange index is unsigned, and unsigned + signed is a float
+        _mass_flux_planes(i, i + 1, W, Q, C, K, nx, ny, nz)
+
+
+@njit(cache=True, error_model="numpy")
+def _mass_flux_planes(i0, i1, W, Q, C, K, nx, ny, nz):
+    """The faces of ``mass_fluxes`` with x index i0 <= i < i1."""
     E, RHO = C[C_E], C[C_RHO]
     for a in range(3):
         ex, ey, ez = unit(a)
         kind, sign = K[K_KIND, a], K[K_SIGN, a]
-        for i in range(nx + ex):
+        for i in range(max(i0, 0), min(i1, nx + ex)):
             for j in range(ny + ey):
                 for k in range(nz + ez):
                     ef = face_voidage(E, i + 1 - ex, j + 1 - ey, k + 1 - ez, i + 1, j + 1, k + 1, kind[i, j, k],
                                       sign[i, j, k])
                     rf = 0.5 * (RHO[i + 1 - ex, j + 1 - ey, k + 1 - ez] + RHO[i + 1, j + 1, k + 1])
                     Q[a, i + 2, j + 2, k + 2] = ef * rf * W[a, i + 2, j + 2, k + 2]
-    fill_face_ghosts(Q, flags, nx, ny, nz)
 
 
 # ---------------------------------------------------------------------------- explicit terms
 @njit(cache=True, error_model="numpy")
-def stresses(W, E, mu, hx, hy, hz, S, T, nx, ny, nz):
+def stresses(W, E, mu, hx, hy, hz, S, T, nx, ny, nz, threads):
     """The stresses of ε τ_g (Hoomans 1996 eq. 48, λ_g = 0; the sign of the stress on the gas) that
     ``explicit_momentum`` differences: S[d] = ε μ (2 ∂w_d/∂x_d − 2/3 ∇·u) at the cells −1..n_d along d
     (the others interior), and on every cell edge T[c] = ε_e μ (∂w_a/∂x_b + ∂w_b/∂x_a), ε_e the mean of
     the four cells around the edge."""
+    if threads > 1:
+        _stress_threads(W, E, mu, hx, hy, hz, S, T, nx, ny, nz)
+    else:
+        _stress_planes(-1, nx + 1, W, E, mu, hx, hy, hz, S, T, nx, ny, nz)
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def _stress_threads(W, E, mu, hx, hy, hz, S, T, nx, ny, nz):
+    for ip in prange(nx + 2):
+        i = np.int64(ip) - 1  # signed: Numba's prange index is unsigned, and unsigned + signed is a float
+        _stress_planes(i, i + 1, W, E, mu, hx, hy, hz, S, T, nx, ny, nz)
+
+
+@njit(cache=True, error_model="numpy")
+def _stress_planes(i0, i1, W, E, mu, hx, hy, hz, S, T, nx, ny, nz):
+    """``stresses`` at the points with x index i0 <= i < i1 (normal stresses from −1, edges from 0)."""
     ihx, ihy, ihz = 1.0 / hx, 1.0 / hy, 1.0 / hz
     for d in range(3):
         ex, ey, ez = unit(d)
-        for i in range(-ex, nx + ex):
+        for i in range(max(i0, -ex), min(i1, nx + ex)):
             for j in range(-ey, ny + ey):
                 for k in range(-ez, nz + ez):
                     du = (W[0, i + 3, j + 2, k + 2] - W[0, i + 2, j + 2, k + 2]) * ihx
@@ -259,9 +384,11 @@ def stresses(W, E, mu, hx, hy, hz, S, T, nx, ny, nz):
     ih = (ihx, ihy, ihz)
     for c in range(3):
         a, b = (c + 1) % 3, (c + 2) % 3
-        for pc in range(N[c]):
-            for pa in range(N[a] + 1):
-                for pb in range(N[b] + 1):
+        # the x index of the edge (pc, pa, pb) is pc (c = 0), pb (c = 1) or pa (c = 2)
+        x0, x1 = max(i0, 0), min(i1, nx + (c != 0))
+        for pc in range(x0 if c == 0 else 0, x1 if c == 0 else N[c]):
+            for pa in range(x0 if c == 2 else 0, x1 if c == 2 else N[a] + 1):
+                for pb in range(x0 if c == 1 else 0, x1 if c == 1 else N[b] + 1):
                     dadb = (W[a][at(c, pc + 2, pa + 2, pb + 2)] - W[a][at(c, pc + 2, pa + 2, pb + 1)]) * ih[b]
                     dbda = (W[b][at(c, pc + 2, pa + 2, pb + 2)] - W[b][at(c, pc + 2, pa + 1, pb + 2)]) * ih[a]
                     ec = 0.25 * (E[at(c, pc + 1, pa, pb)] + E[at(c, pc + 1, pa + 1, pb)]
@@ -275,14 +402,30 @@ def explicit_momentum(W, Q, C, K, F, S, T, fpar, ipar):
     F[F_EX] = −[∇·(ερ w u) − w ∇·(ερ u)] − ∇·(ε τ_g), the convection in advective form (the mass fluxes Q
     of the continuity equation, averaged onto the faces of the face's control volume; face velocities
     upwind or TVD, ``_operators.face_value``) and the viscous stress of eq. 48 (``stresses``)."""
-    nx, ny, nz, scheme = ipar[I_N], ipar[I_N + 1], ipar[I_N + 2], ipar[I_SCHEME]
+    nx, ny, nz, scheme, threads = ipar[I_N], ipar[I_N + 1], ipar[I_N + 2], ipar[I_SCHEME], ipar[I_THREADS]
     hx, hy, hz = fpar[FP_H], fpar[FP_H + 1], fpar[FP_H + 2]
-    stresses(W, C[C_E], fpar[FP_MU], hx, hy, hz, S, T, nx, ny, nz)
+    stresses(W, C[C_E], fpar[FP_MU], hx, hy, hz, S, T, nx, ny, nz, threads)
+    if threads > 1:
+        _explicit_threads(W, Q, K, F, S, T, hx, hy, hz, scheme, nx, ny, nz)
+    else:
+        _explicit_planes(0, nx + 1, W, Q, K, F, S, T, hx, hy, hz, scheme, nx, ny, nz)
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def _explicit_threads(W, Q, K, F, S, T, hx, hy, hz, scheme, nx, ny, nz):
+    for ip in prange(nx + 1):
+        i = np.int64(ip)  # signed: Numba's prange index is unsigned, and unsigned + signed is a float
+        _explicit_planes(i, i + 1, W, Q, K, F, S, T, hx, hy, hz, scheme, nx, ny, nz)
+
+
+@njit(cache=True, error_model="numpy")
+def _explicit_planes(i0, i1, W, Q, K, F, S, T, hx, hy, hz, scheme, nx, ny, nz):
+    """``explicit_momentum`` on the faces with x index i0 <= i < i1."""
     ih = (1.0 / hx, 1.0 / hy, 1.0 / hz)
     for a in range(3):
         ax, ay, az = unit(a)
         kind, EX = K[K_KIND, a], F[F_EX, a]
-        for i in range(nx + ax):
+        for i in range(max(i0, 0), min(i1, nx + ax)):
             for j in range(ny + ay):
                 for k in range(nz + az):
                     if kind[i, j, k] != SOLVED:
@@ -312,15 +455,44 @@ def explicit_momentum(W, Q, C, K, F, S, T, fpar, ipar):
 
 
 @njit(cache=True, error_model="numpy")
-def _outflow_shares(F, K, C, fpar, total, nx, ny, nz):
+def _outflow_shares(F, K, C, fpar, total, nx, ny, nz, threads):
     """Outward mass flux through the interior face next to each continuous-outflow face, at t (zero
-    normal gradient), into F[F_WOUT]; adds them to ``total`` = [sum, sum of |.|, area]."""
+    normal gradient), into F[F_WOUT]; adds them to ``total`` = [sum, sum of |.|, area] (in face order, serial)."""
+    if threads > 1:
+        _outflow_flow_threads(F, K, C, fpar, nx, ny, nz)
+    else:
+        _outflow_flow_planes(0, nx + 1, F, K, C, fpar, nx, ny, nz)
+    for a in range(3):
+        ex, ey, ez = unit(a)
+        area = fpar[FP_A + a]
+        kind, share = K[K_KIND, a], F[F_WOUT, a]
+        for i in range(nx + ex):
+            for j in range(ny + ey):
+                for k in range(nz + ez):
+                    if kind[i, j, k] == OUTFLOW_FACE:
+                        f = share[i, j, k]
+                        total[0] += f
+                        total[1] += abs(f)
+                        total[2] += area
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def _outflow_flow_threads(F, K, C, fpar, nx, ny, nz):
+    for ip in prange(nx + 1):
+        i = np.int64(ip)  # signed: Numba's prange index is unsigned, and unsigned + signed is a float
+        _outflow_flow_planes(i, i + 1, F, K, C, fpar, nx, ny, nz)
+
+
+@njit(cache=True, error_model="numpy")
+def _outflow_flow_planes(i0, i1, F, K, C, fpar, nx, ny, nz):
+    """The outward flux of each continuous-outflow face (0 on the other faces) into F[F_WOUT], faces with x
+    index i0 <= i < i1."""
     RHO, E = C[C_RHO], C[C_E]
     for a in range(3):
         ex, ey, ez = unit(a)
         area = fpar[FP_A + a]
         kind, sign, old, share = K[K_KIND, a], K[K_SIGN, a], F[F_OLD, a], F[F_WOUT, a]
-        for i in range(nx + ex):
+        for i in range(max(i0, 0), min(i1, nx + ex)):
             for j in range(ny + ey):
                 for k in range(nz + ez):
                     if kind[i, j, k] != OUTFLOW_FACE:
@@ -332,11 +504,7 @@ def _outflow_shares(F, K, C, fpar, total, nx, ny, nz):
                         c0, c1, c2 = i + 1, j + 1, k + 1
                     else:
                         c0, c1, c2 = i + 1 - ex, j + 1 - ey, k + 1 - ez
-                    f = -s * w * E[c0, c1, c2] * RHO[c0, c1, c2] * area
-                    share[i, j, k] = f
-                    total[0] += f
-                    total[1] += abs(f)
-                    total[2] += area
+                    share[i, j, k] = -s * w * E[c0, c1, c2] * RHO[c0, c1, c2] * area
 
 
 @njit(cache=True, error_model="numpy")
@@ -353,9 +521,25 @@ def _normalise_shares(F, K, fpar, total):
 
 
 @njit(cache=True, error_model="numpy")
-def _face_constants(C, F, K, fpar, idt, nx, ny, nz):
+def _face_constants(C, F, K, fpar, idt, nx, ny, nz, threads):
     """Per step: ε_f at t + dt (``face_voidage``) and the pressure term's ε_p,f = ε_f, X1 = w_old/dt + g,
     X2 = explicit terms + β u_s + source."""
+    if threads > 1:
+        _face_constant_threads(C, F, K, fpar, idt, nx, ny, nz)
+    else:
+        _face_constant_planes(0, nx + 1, C, F, K, fpar, idt, nx, ny, nz)
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def _face_constant_threads(C, F, K, fpar, idt, nx, ny, nz):
+    for ip in prange(nx + 1):
+        i = np.int64(ip)  # signed: Numba's prange index is unsigned, and unsigned + signed is a float
+        _face_constant_planes(i, i + 1, C, F, K, fpar, idt, nx, ny, nz)
+
+
+@njit(cache=True, error_model="numpy")
+def _face_constant_planes(i0, i1, C, F, K, fpar, idt, nx, ny, nz):
+    """``_face_constants`` on the faces with x index i0 <= i < i1."""
     E = C[C_E]
     for a in range(3):
         ex, ey, ez = unit(a)
@@ -363,7 +547,7 @@ def _face_constants(C, F, K, fpar, idt, nx, ny, nz):
         kind, sign = K[K_KIND, a], K[K_SIGN, a]
         EF, X1, X2, old, exp_, rhs, EP = (F[F_EF, a], F[F_X1, a], F[F_X2, a], F[F_OLD, a], F[F_EX, a], F[F_RHS, a],
                                           F[F_EP, a])
-        for i in range(nx + ex):
+        for i in range(max(i0, 0), min(i1, nx + ex)):
             for j in range(ny + ey):
                 for k in range(nz + ez):
                     ef = face_voidage(E, i + 1 - ex, j + 1 - ey, k + 1 - ez, i + 1, j + 1, k + 1, kind[i, j, k],
@@ -374,62 +558,110 @@ def _face_constants(C, F, K, fpar, idt, nx, ny, nz):
                     X2[i, j, k] = exp_[i, j, k] + rhs[i, j, k]
 
 
+@njit(cache=True, error_model="numpy", parallel=True)
+def _load_threads(p, rho, u, v, w, eps_old, W, C, F, p_ref, nx):
+    for ip in prange(nx + 1):
+        i = np.int64(ip)  # signed: Numba's prange index is unsigned, and unsigned + signed is a float
+        _load_planes(i, i + 1, p, rho, u, v, w, eps_old, W, C, F, p_ref)
+
+
 @njit(cache=True, error_model="numpy")
-def begin_step(p, rho, u, v, w, eps_old, eps_new, W, Q, C, F, K, S, T, flags, RULES, fpar, ipar):
-    """Load the state at t (p absolute [Pa], rho, u, v, w, voidage), fill its ghosts, its mass fluxes and the
-    explicit momentum terms F[F_EX]; the shares of the continuous outflow; then the new voidage
-    ``eps_new`` and the boundary cells at t + dt, and the per-step face constants. F[F_BETA] and F[F_RHS]
-    must hold this step's β and β u_s + source on every face."""
-    nx, ny, nz = ipar[I_N], ipar[I_N + 1], ipar[I_N + 2]
-    p_ref = fpar[FP_PREF]
+def _load_planes(i0, i1, p, rho, u, v, w, eps_old, W, C, F, p_ref):
+    """The state at t into C (p − p_ref, ε, ερ), W and F[F_OLD], x planes i0 <= i < i1."""
     P, E, RO = C[C_P], C[C_E], C[C_RO_OLD]
-    for i in range(nx):
-        for j in range(ny):
-            for k in range(nz):
+    for i in range(max(i0, 0), min(i1, p.shape[0])):
+        for j in range(p.shape[1]):
+            for k in range(p.shape[2]):
                 P[i + 1, j + 1, k + 1] = p[i, j, k] - p_ref
                 E[i + 1, j + 1, k + 1] = eps_old[i, j, k]
                 RO[i + 1, j + 1, k + 1] = eps_old[i, j, k] * rho[i, j, k]
     for a in range(3):
         src = u if a == 0 else (v if a == 1 else w)
         old = F[F_OLD, a]
-        for i in range(src.shape[0]):
+        for i in range(max(i0, 0), min(i1, src.shape[0])):
             for j in range(src.shape[1]):
                 for k in range(src.shape[2]):
                     W[a, i + 2, j + 2, k + 2] = src[i, j, k]
                     old[i, j, k] = src[i, j, k]
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def _voidage_threads(eps, C, nx):
+    for ip in prange(nx):
+        i = np.int64(ip)  # signed: Numba's prange index is unsigned, and unsigned + signed is a float
+        _voidage_planes(i, i + 1, eps, C)
+
+
+@njit(cache=True, error_model="numpy")
+def _voidage_planes(i0, i1, eps, C):
+    """ε into the interior cells of C[C_E], x planes i0 <= i < i1."""
+    E = C[C_E]
+    for i in range(max(i0, 0), i1):
+        for j in range(eps.shape[1]):
+            for k in range(eps.shape[2]):
+                E[i + 1, j + 1, k + 1] = eps[i, j, k]
+
+
+@njit(cache=True, error_model="numpy")
+def begin_step(p, rho, u, v, w, eps_old, eps_new, W, Q, C, F, K, S, T, flags, RULES, fpar, ipar):
+    """Load the state at t (p absolute [Pa], rho, u, v, w, voidage), fill its ghosts, its mass fluxes and the
+    explicit momentum terms F[F_EX]; the shares of the continuous outflow; then the new voidage
+    ``eps_new`` and the boundary cells at t + dt, and the per-step face constants. F[F_BETA] and F[F_RHS]
+    must hold this step's β and β u_s + source on every face."""
+    nx, ny, nz, threads = ipar[I_N], ipar[I_N + 1], ipar[I_N + 2], ipar[I_THREADS]
+    p_ref = fpar[FP_PREF]
+    if threads > 1:
+        _load_threads(p, rho, u, v, w, eps_old, W, C, F, p_ref, nx)
+    else:
+        _load_planes(0, nx + 1, p, rho, u, v, w, eps_old, W, C, F, p_ref)
     boundary_cells(C, C[C_PFIX_OLD], flags, RULES, fpar, ipar)
-    fill_face_ghosts(W, flags, nx, ny, nz)
-    mass_fluxes(W, Q, C, K, flags, nx, ny, nz)
+    fill_face_ghosts(W, flags, nx, ny, nz, threads)
+    mass_fluxes(W, Q, C, K, flags, nx, ny, nz, threads)
     explicit_momentum(W, Q, C, K, F, S, T, fpar, ipar)
     total = np.zeros(3)
-    _outflow_shares(F, K, C, fpar, total, nx, ny, nz)
+    _outflow_shares(F, K, C, fpar, total, nx, ny, nz, threads)
     if total[2] > 0.0:
         _normalise_shares(F, K, fpar, total)
-    for i in range(nx):
-        for j in range(ny):
-            for k in range(nz):
-                E[i + 1, j + 1, k + 1] = eps_new[i, j, k]
+    if threads > 1:
+        _voidage_threads(eps_new, C, nx)
+    else:
+        _voidage_planes(0, nx, eps_new, C)
     boundary_cells(C, C[C_PFIX], flags, RULES, fpar, ipar)
-    _face_constants(C, F, K, fpar, 1.0 / fpar[FP_DT], nx, ny, nz)
+    _face_constants(C, F, K, fpar, 1.0 / fpar[FP_DT], nx, ny, nz, threads)
 
 
 @njit(cache=True, error_model="numpy")
 def end_step(p, rho, u, v, w, eps, eps_new, W, C, flags, fpar, ipar):
     """Fill the ghost (and periodic duplicate) faces, then write the fields at t + dt into the state arrays
     (p as absolute pressure, ε = eps_new)."""
-    nx, ny, nz = ipar[I_N], ipar[I_N + 1], ipar[I_N + 2]
-    fill_face_ghosts(W, flags, nx, ny, nz)
+    nx, ny, nz, threads = ipar[I_N], ipar[I_N + 1], ipar[I_N + 2], ipar[I_THREADS]
+    fill_face_ghosts(W, flags, nx, ny, nz, threads)
+    if threads > 1:
+        _store_threads(p, rho, u, v, w, eps, eps_new, W, C, fpar[FP_PREF], nx)
+    else:
+        _store_planes(0, nx + 1, p, rho, u, v, w, eps, eps_new, W, C, fpar[FP_PREF])
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def _store_threads(p, rho, u, v, w, eps, eps_new, W, C, p_ref, nx):
+    for ip in prange(nx + 1):
+        i = np.int64(ip)  # signed: Numba's prange index is unsigned, and unsigned + signed is a float
+        _store_planes(i, i + 1, p, rho, u, v, w, eps, eps_new, W, C, p_ref)
+
+
+@njit(cache=True, error_model="numpy")
+def _store_planes(i0, i1, p, rho, u, v, w, eps, eps_new, W, C, p_ref):
+    """The fields at t + dt into the state arrays (``end_step``), x planes i0 <= i < i1."""
     P, RHO = C[C_P], C[C_RHO]
-    p_ref = fpar[FP_PREF]
-    for i in range(nx):
-        for j in range(ny):
-            for k in range(nz):
+    for i in range(max(i0, 0), min(i1, p.shape[0])):
+        for j in range(p.shape[1]):
+            for k in range(p.shape[2]):
                 p[i, j, k] = P[i + 1, j + 1, k + 1] + p_ref
                 rho[i, j, k] = RHO[i + 1, j + 1, k + 1]
                 eps[i, j, k] = eps_new[i, j, k]
     for a in range(3):
         dst = u if a == 0 else (v if a == 1 else w)
-        for i in range(dst.shape[0]):
+        for i in range(max(i0, 0), min(i1, dst.shape[0])):
             for j in range(dst.shape[1]):
                 for k in range(dst.shape[2]):
                     dst[i, j, k] = W[a, i + 2, j + 2, k + 2]
@@ -437,7 +669,7 @@ def end_step(p, rho, u, v, w, eps, eps_new, W, C, flags, fpar, ipar):
 
 # ---------------------------------------------------------------------------- one iteration
 @njit(cache=True, error_model="numpy")
-def _face_fluxes(W, C, F, K, fpar, nx, ny, nz):
+def _face_fluxes(W, C, F, K, fpar, nx, ny, nz, threads):
     """Momentum of every face at the current pressure and the mass fluxes A (ερ)_f w [kg/s] into F[F_FLUX]:
     0 on outflow faces (``_outflow`` adds theirs), periodic duplicates those of face 0. Solved faces::
 
@@ -445,6 +677,35 @@ def _face_fluxes(W, C, F, K, fpar, nx, ny, nz):
         w = (m X1 + X2 - ε_p,f ∂p/∂x_a) / (m/dt + β),   m = ε_f ρ_f
 
     Returns whether there are outflow faces."""
+    if threads > 1:
+        has_outflow = _face_flux_threads(W, C, F, K, fpar, nx, ny, nz) > 0
+    else:
+        has_outflow = _face_flux_planes(0, nx + 1, W, C, F, K, fpar, nx, ny, nz)
+    for a in range(3):
+        kind, FL = K[K_KIND, a], F[F_FLUX, a]
+        na = nx if a == 0 else (ny if a == 1 else nz)
+        nb, nc = (ny, nz) if a == 0 else ((nz, nx) if a == 1 else (nx, ny))
+        for s in range(nb):
+            for t in range(nc):
+                g = at(a, na, s, t)
+                if kind[g] == COPY:
+                    FL[g] = FL[at(a, 0, s, t)]
+    return has_outflow
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def _face_flux_threads(W, C, F, K, fpar, nx, ny, nz):
+    n_outflow = 0
+    for ip in prange(nx + 1):
+        i = np.int64(ip)  # signed: Numba's prange index is unsigned, and unsigned + signed is a float
+        n_outflow += 1 if _face_flux_planes(i, i + 1, W, C, F, K, fpar, nx, ny, nz) else 0
+    return n_outflow
+
+
+@njit(cache=True, error_model="numpy")
+def _face_flux_planes(i0, i1, W, C, F, K, fpar, nx, ny, nz):
+    """``_face_fluxes`` on the faces with x index i0 <= i < i1 (not the periodic duplicates); returns whether
+    there are outflow faces among them (a flag, not a count: a counter in the loop halves its speed)."""
     P, RHO = C[C_P], C[C_RHO]
     idt = 1.0 / fpar[FP_DT]
     has_outflow = False
@@ -455,7 +716,7 @@ def _face_fluxes(W, C, F, K, fpar, nx, ny, nz):
         kind = K[K_KIND, a]
         EF, X1, X2, beta, fix, FL, EP = (F[F_EF, a], F[F_X1, a], F[F_X2, a], F[F_BETA, a], F[F_FIX, a], F[F_FLUX, a],
                                          F[F_EP, a])
-        for i in range(nx + ex):
+        for i in range(max(i0, 0), min(i1, nx + ex)):
             for j in range(ny + ey):
                 for k in range(nz + ez):
                     kk = kind[i, j, k]
@@ -475,13 +736,6 @@ def _face_fluxes(W, C, F, K, fpar, nx, ny, nz):
                     elif kk == OUTFLOW_FACE:
                         FL[i, j, k] = 0.0
                         has_outflow = True
-        na = nx if a == 0 else (ny if a == 1 else nz)
-        nb, nc = (ny, nz) if a == 0 else ((nz, nx) if a == 1 else (nx, ny))
-        for s in range(nb):
-            for t in range(nc):
-                g = at(a, na, s, t)
-                if kind[g] == COPY:
-                    FL[g] = FL[at(a, 0, s, t)]
     return has_outflow
 
 
@@ -550,6 +804,27 @@ def _outflow(W, C, F, K, row_of, R, fpar, need, nx, ny, nz):
     return inflow, outflow
 
 
+@njit(cache=True, error_model="numpy", parallel=True)
+def _residual_threads(C, F, R, vdt, nx, ny, nz):
+    for ip in prange(nx):
+        i = np.int64(ip)  # signed: Numba's prange index is unsigned, and unsigned + signed is a float
+        _residual_planes(i, i + 1, C, F, R, vdt, ny, nz)
+
+
+@njit(cache=True, error_model="numpy")
+def _residual_planes(i0, i1, C, F, R, vdt, ny, nz):
+    """The cell continuity residuals of ``predict_residual`` (without outflow faces), x planes i0 <= i < i1."""
+    E, RHO, RO = C[C_E], C[C_RHO], C[C_RO_OLD]
+    FLX, FLY, FLZ = F[F_FLUX, 0], F[F_FLUX, 1], F[F_FLUX, 2]
+    for i in range(max(i0, 0), i1):
+        for j in range(ny):
+            for k in range(nz):
+                er = E[i + 1, j + 1, k + 1] * RHO[i + 1, j + 1, k + 1]
+                a = vdt * (er - RO[i + 1, j + 1, k + 1])
+                R[(i * ny + j) * nz + k] = a + ((FLX[i + 1, j, k] - FLX[i, j, k]) + (FLY[i, j + 1, k] - FLY[i, j, k])
+                                                + (FLZ[i, j, k + 1] - FLZ[i, j, k]))
+
+
 @njit(cache=True, error_model="numpy")
 def predict_residual(W, C, F, K, row_of, R, fpar, ipar, out):
     """Face velocities from the momentum balance at the current pressure (``_face_fluxes``), then the cell
@@ -564,19 +839,21 @@ def predict_residual(W, C, F, K, row_of, R, fpar, ipar, out):
     idt = 1.0 / fpar[FP_DT]
     vol = fpar[FP_VOL]
     RHO, E, RO = C[C_RHO], C[C_E], C[C_RO_OLD]
-    has_outflow = _face_fluxes(W, C, F, K, fpar, nx, ny, nz)
-    FLX, FLY, FLZ = F[F_FLUX, 0], F[F_FLUX, 1], F[F_FLUX, 2]
+    threads = ipar[I_THREADS]
+    has_outflow = _face_fluxes(W, C, F, K, fpar, nx, ny, nz, threads)
+    vdt = vol * idt
+    if threads > 1:
+        _residual_threads(C, F, R, vdt, nx, ny, nz)
+    else:
+        _residual_planes(0, nx, C, F, R, vdt, ny, nz)
     acc = 0.0
     acc_abs = 0.0
     mass = 0.0
-    vdt = vol * idt
-    for i in range(nx):
+    for i in range(nx):  # the sums in cell order, serial: the same on any number of threads
         for j in range(ny):
             for k in range(nz):
                 er = E[i + 1, j + 1, k + 1] * RHO[i + 1, j + 1, k + 1]
                 a = vdt * (er - RO[i + 1, j + 1, k + 1])
-                R[(i * ny + j) * nz + k] = a + ((FLX[i + 1, j, k] - FLX[i, j, k]) + (FLY[i, j + 1, k] - FLY[i, j, k])
-                                                + (FLZ[i, j, k + 1] - FLZ[i, j, k]))
                 acc += a
                 acc_abs += abs(a)
                 mass += er
@@ -668,15 +945,32 @@ def assemble_pressure(data, diag_pos, pos, pin_pos, W, C, F, K, fpar, ipar):
         data[pin_diag] = 1.0
 
 
+@njit(cache=True, error_model="numpy", parallel=True)
+def _correction_threads(C, dp, nx, ny, nz):
+    for ip in prange(nx):
+        i = np.int64(ip)  # signed: Numba's prange index is unsigned, and unsigned + signed is a float
+        _correction_planes(i, i + 1, C, dp, ny, nz)
+
+
+@njit(cache=True, error_model="numpy")
+def _correction_planes(i0, i1, C, dp, ny, nz):
+    """p += p' in the interior cells of the x planes i0 <= i < i1 (``correct_pressure``)."""
+    P = C[C_P]
+    for i in range(max(i0, 0), i1):
+        for j in range(ny):
+            for k in range(nz):
+                P[i + 1, j + 1, k + 1] += dp[(i * ny + j) * nz + k]
+
+
 @njit(cache=True, error_model="numpy")
 def correct_pressure(C, dp, flags, RULES, fpar, ipar):
     """p += p' in every cell (p'_row of cell (i, j, k) at (i ny + j) nz + k), then the boundary cells of
     the pressure and the density everywhere."""
     nx, ny, nz = ipar[I_N], ipar[I_N + 1], ipar[I_N + 2]
-    P = C[C_P]
-    for i in range(nx):
-        for j in range(ny):
-            for k in range(nz):
-                P[i + 1, j + 1, k + 1] += dp[(i * ny + j) * nz + k]
+    P, threads = C[C_P], ipar[I_THREADS]
+    if threads > 1:
+        _correction_threads(C, dp, nx, ny, nz)
+    else:
+        _correction_planes(0, nx, C, dp, ny, nz)
     fill_centre_ghosts(P, flags, RULES[RULE_P], C[C_PFIX], nx, ny, nz)
-    update_density(C, fpar[FP_COMP], fpar[FP_RHOC], fpar[FP_PREF])
+    update_density(C, fpar[FP_COMP], fpar[FP_RHOC], fpar[FP_PREF], threads)

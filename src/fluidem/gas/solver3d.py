@@ -7,7 +7,9 @@ with ``w`` (z velocity on z-faces) from t to t + dt; the particle side enters on
 β with the solids velocity (``solids_u``, ``solids_v``, ``solids_w``) and an explicit momentum source
 (``source_u``, ``source_v``, ``source_w``). The loops over cells and faces are the compiled kernels of
 ``_solver3d_kernels``; here the Newton iterations of a step are driven one kernel call at a time (a few
-calls per iteration, nothing per cell).
+calls per iteration, nothing per cell). With more than one Numba thread in use the kernels' passes over the
+grid run one x plane per work item on the threads; the sums stay serial in grid order, so a step gives the
+same fields, bit for bit, on any number of threads (``tests/unit/test_gas3d_threads.py``).
 
 The pressure corrections are solved (``linear_solver``) by GMRES with an aggregation multigrid
 (``_multigrid3d_kernels``, 7-point stencil, 2 cells per coarse cell along the strongly coupled axes:
@@ -39,6 +41,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 
+import numba
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
@@ -81,6 +84,10 @@ LINEAR_SOLVERS_3D = ("auto", "multigrid", "superlu")
 # correction left 1e-4 short, e.g. a closed box's hydrostatic profile off by 1e-9 Pa, not 1e-11)
 KRYLOV_REDUCTION_3D = 1e-5
 _LOW_SIDES = ("left", "bottom", "front")
+# grids of fewer cells run the kernels' passes serially on any number of threads: on a 2-core machine the
+# threaded passes saved nothing at 1800 cells, and lost at 1800 to 1e5 cells whenever another process
+# shared a core (``benchmarks/README.md``, "3D coupled gas step"); above, not yet measured on an idle machine
+PARALLEL_MIN_CELLS = 200_000
 
 
 class GasSolver3D(GasSolver):
@@ -269,6 +276,11 @@ class GasSolver3D(GasSolver):
         self._ipar[lay.I_SCHEME] = SCHEMES[self.convection]
         self._ipar[lay.I_PIN] = self.pin_diag
         self._out = np.zeros(lay.N_OUT)
+        self._face_shapes = tuple(gd.face_shape(a) for a in range(3))
+        self._face_slices = tuple((a,) + tuple(slice(0, n) for n in self._face_shapes[a]) for a in range(3))
+        self._none = np.zeros((0, 0, 0))  # "no array" for the input kernels
+        self._state_ok = None  # the state arrays _check_state found right (references)
+        self.parallel_min_cells = PARALLEL_MIN_CELLS  # fewer cells: the kernels' passes serial on any threads
         choice = "multigrid" if linear_solver == "auto" else linear_solver
         self._mg = None
         if choice == "multigrid":
@@ -401,26 +413,33 @@ class GasSolver3D(GasSolver):
         raise CaseError(f"gas {name}: shape {a.shape} does not match {allowed}")
 
     def _load_inputs(self, beta, solids, sources) -> None:
-        """F[F_BETA] = β and F[F_RHS] = β w_s + source on the faces of every axis; CaseError when out of range."""
+        """F[F_BETA] = β and F[F_RHS] = β w_s + source on the faces of every axis (``K3.load_beta``,
+        ``K3.load_momentum_sources``: no temporaries); CaseError when out of range."""
         F = self.F
-        F[lay.F_BETA] = 0.0
-        F[lay.F_RHS] = 0.0
         per_face = isinstance(beta, (tuple, list))
         if per_face and len(beta) != 3:
             raise CaseError("gas beta: give a number, a centre array or three face arrays (x, y, z faces)")
+        if beta is None:
+            F[lay.F_BETA] = 0.0
+        none = self._none
         for a in range(3):
-            at = (a,) + tuple(slice(0, n) for n in self.grid.face_shape(a))  # the faces of axis a in the stacks
+            us = none
             if beta is not None:
                 b = self._face(f"beta[{a}]", beta[a], a, centre_ok=False) if per_face else self._face("beta", beta, a)
-                if not np.all(np.isfinite(b) & (b >= 0.0)):
+                if not K3.load_beta(F, a, b):
                     raise CaseError("gas beta: must be finite and >= 0 [kg m^-3 s^-1] on every face")
-                F[(lay.F_BETA,) + at] = b
                 if solids[a] is not None:  # the solids velocity counts only where β is given
-                    F[(lay.F_RHS,) + at] += b * self._face(f"solids velocity {'uvw'[a]}", solids[a], a)
-            if sources[a] is not None:
-                F[(lay.F_RHS,) + at] += self._face(f"source {'uvw'[a]}", sources[a], a)
+                    us = self._face(f"solids velocity {'uvw'[a]}", solids[a], a)
+            source = none if sources[a] is None else self._face(f"source {'uvw'[a]}", sources[a], a)
+            K3.load_momentum_sources(F, a, us, source, *self._face_shapes[a])
 
     def _check_state(self, state: GasState) -> None:
+        """Shapes, dtype and layout of the state's arrays; arrays found right once are remembered (references)
+        and not checked again while the state holds the same objects."""
+        ok = self._state_ok
+        if ok is not None and ok[0] is state.p and ok[1] is state.rho and ok[2] is state.voidage \
+                and ok[3] is state.u and ok[4] is state.v and ok[5] is getattr(state, "w", None):
+            return
         gd = self.grid
         shapes = {"p": gd.shape, "rho": gd.shape, "voidage": gd.shape, "u": gd.u_shape, "v": gd.v_shape,
                   "w": gd.w_shape}
@@ -432,6 +451,7 @@ class GasSolver3D(GasSolver):
                                 (" (a 3D gas state has w; make it with GasSolver.initial_state)" if key == "w" else ""))
             if a.dtype != np.float64 or not a.flags.c_contiguous:
                 raise CaseError(f"gas state.{key}: must be a C-contiguous float64 array (as initial_state makes it)")
+        self._state_ok = (state.p, state.rho, state.voidage, state.u, state.v, state.w)
 
     def _pressure_voidage(self, value) -> tuple:
         """The step input ``pressure_voidage``: three face arrays in (0, 1]; CaseError otherwise."""
@@ -440,9 +460,9 @@ class GasSolver3D(GasSolver):
         out = []
         for a, e in enumerate(value):
             e = np.asarray(e, float)
-            if e.shape != self.grid.face_shape(a):
+            if e.shape != self._face_shapes[a]:
                 raise CaseError(f"gas pressure_voidage[{a}]: shape {e.shape}, expected {self.grid.face_shape(a)}")
-            if not np.all((e > 0.0) & (e <= 1.0)):
+            if not K3.unit_interval(e):
                 raise CaseError(f"gas pressure_voidage[{a}]: every face value must lie in (0, 1]")
             out.append(e)
         return tuple(out)
@@ -473,7 +493,8 @@ class GasSolver3D(GasSolver):
             eps_new = state.voidage
         else:
             eps_new = np.ascontiguousarray(self._centre_array("voidage", voidage), dtype=float)
-            self._check_voidage(eps_new)
+            if not K3.unit_interval(eps_new):
+                self._check_voidage(eps_new)  # raises the CaseError that names the value
         self._load_inputs(beta, (solids_u, solids_v, solids_w), (source_u, source_v, source_w))
         if self._time_dependent:  # prescribed pressures at t and t + dt, inflow velocities at t + dt
             if t != self._bc_time:
@@ -482,11 +503,13 @@ class GasSolver3D(GasSolver):
             self._set_boundary_values(t + dt)
         fpar, ipar, out = self._fpar, self._ipar, self._out
         fpar[lay.FP_DT] = dt
+        # the kernels' passes on that many threads (bitwise the same on any number)
+        ipar[lay.I_THREADS] = numba.get_num_threads() if self.R.size >= self.parallel_min_cells else 1
         K3.begin_step(state.p, state.rho, state.u, state.v, state.w, state.voidage, eps_new, self.W, self.Q, self.C,
                       self.F, self.K, self.S, self.T, self.flags, self.RULES, fpar, ipar)
         if pressure_voidage is not None:  # replaces the ε_f that begin_step gave the pressure term
             for a, e in enumerate(pressure_voidage):
-                self.F[(lay.F_EP, a) + tuple(slice(0, n) for n in e.shape)] = e
+                self.F[(lay.F_EP,) + self._face_slices[a]] = e
         it = 0
         prev = math.inf
         fresh = False  # the factors (SuperLU) are of this iteration's matrix

@@ -323,7 +323,7 @@ def deposit3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu
     valid : (N,) bool scratch of the drag checks, allocated here if None or shorter. K_p is computed first (in
     parallel chunks, ``kp3d``), then added to the faces in particle order (``_face_sums``, x slabs on all
     threads)."""
-    nx, ny, nz = voidage.shape
+    nx = voidage.shape[0]
     idx, idy, idz = 1.0 / dx, 1.0 / dy, 1.0 / dz
     n = position.shape[0]
     if valid is None:

@@ -28,7 +28,7 @@ lo … hi − 1, the face nx in the last slab), and each slab walks all particle
 particle none of whose x nodes (centres, faces, ∇p faces, centre cell) lies in it, and adds only the terms
 whose x node does (``_face_sums``). Every face and cell then receives the same numbers, in the same order, as
 in one serial pass, so the results are bitwise the same for any number of threads; at most ``CHUNK``
-particles take the one serial pass (one thread: a single slab).
+particles, or one thread, take the one serial pass.
 """
 import math
 
@@ -340,7 +340,7 @@ def deposit3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu
         EU[:, :, :] = 0.0
         EV[:, :, :] = 0.0
         EW[:, :, :] = 0.0
-    if n > CHUNK:
+    if n > CHUNK and slab_count(nx) > 1:
         _face_sums_parallel(position, velocity, volume, kp, ok, idx, idy, idz, px, py, pz, fold, pair, AU, BU, AV,
                             BV, AW, BW, KC, EU, EV, EW)
     else:

@@ -31,8 +31,8 @@ follow in particle order, on all threads too: the grid is split along x (its fir
 one contiguous block of every grid array) into one slab of whole yz planes per thread (``slab_count``,
 ``slab_bounds``), and each slab walks all particles in particle order and adds only the cells whose wrapped x
 index lies in it (``_volume_add``). Every cell then receives the same numbers, in the same order, as in one serial pass over
-all particles, so the maps are bitwise the same for any number of threads. At most ``CHUNK`` particles take
-the one serial pass (one thread: a single slab).
+all particles, so the maps are bitwise the same for any number of threads. At most ``CHUNK`` particles, or
+one thread, take the one serial pass.
 """
 import math
 
@@ -360,8 +360,9 @@ def _volume_parallel(position, radius, scale, dx, dy, dz, nx, ny, nz, px, py, pz
 
 @njit(cache=True, inline="always")
 def slab_count(nx):
-    """Number of x slabs of the parallel grid sums: one per thread of the calling parallel region (Numba's
-    ``get_num_threads``), at most nx. Called only inside ``parallel=True`` kernels (module docstring)."""
+    """Number of x slabs of the parallel grid sums: one per thread (Numba's ``get_num_threads``), at most nx.
+    Called only in kernels that call a ``parallel=True`` one too, which starts Numba's threads when it is
+    loaded from the cache."""
     return max(1, min(_num_threads(), nx))
 
 
@@ -461,7 +462,7 @@ def volume_deposit(position, radius, scale, velocity, dx, dy, dz, px, py, pz, ou
         _volume_parallel(position, radius, scale, dx, dy, dz, nx, ny, nz, px, py, pz, nodes, stride, buf)
     else:
         _volume_range(0, n, position, radius, scale, dx, dy, dz, nx, ny, nz, px, py, pz, nodes, stride, buf)
-    if n > CHUNK:
+    if n > CHUNK and slab_count(nx) > 1:
         _volume_add_parallel(position, radius, scale, velocity, dx, dy, dz, px, py, pz, nodes, stride, buf, out, ovx,
                              ovy, ovz)
     else:
@@ -537,7 +538,7 @@ def centroid_deposit3d(position, weight, velocity, dx, dy, dz, out, ovx, ovy, ov
         _centroid_parallel(position, dx, dy, dz, nx, ny, nz, cells)
     else:
         _centroid_range(0, n, position, dx, dy, dz, nx, ny, nz, cells)
-    if n > CHUNK:
+    if n > CHUNK and slab_count(nx) > 1:
         _centroid_add_parallel(n, weight, velocity, cells, out, ovx, ovy, ovz)
     else:
         _centroid_add(0, nx, n, weight, velocity, cells, out, ovx, ovy, ovz)

@@ -377,14 +377,32 @@ def slab_bounds(s, m, nx):
     return lo, hi
 
 
+@njit(cache=True, inline="always")
+def _x_range_meets(x, r, dx, nx, px, lo, hi):
+    """Whether a wrapped x index of the cells [a0, a1] of ``_cell_range`` (those ``_volume_range`` and
+    ``_volume_add`` take for a sphere at x of radius r) lies in [lo, hi)."""
+    a0, a1 = _cell_range(x, r, dx, nx, px)
+    if a1 - a0 + 1 >= nx:
+        return True
+    w0 = a0 % nx
+    w1 = a1 % nx
+    if w0 <= w1:
+        return w0 < hi and w1 >= lo
+    return w0 < hi or w1 >= lo  # [w0, nx − 1] and [0, w1]
+
+
 @njit(cache=True)
 def _volume_add(lo, hi, position, radius, scale, velocity, dx, dy, dz, px, py, pz, nodes, stride, work, out, ovx,
                 ovy, ovz):
     """The sums of ``volume_deposit`` onto the cells whose (wrapped) x index lies in [lo, hi): the cells of
     ``_volume_range`` added in particle order (a sphere with the count −1 by ``sphere_box_volume`` of each
-    cell, as the deposit was before node values). [0, nx) is the whole serial pass."""
+    cell, as the deposit was before node values); a sphere whose x cell range misses the slab is skipped from
+    its position (``_x_range_meets``). [0, nx) is the whole serial pass."""
     nx, ny, nz = out.shape
+    whole = lo <= 0 and hi >= nx
     for p in range(position.shape[0]):
+        if not whole and not _x_range_meets(position[p, 0], radius[p], dx, nx, px, lo, hi):
+            continue  # none of its cells in the slab: its scratch is not read
         e = p * stride + nodes
         m = int(work[e])
         vx = velocity[p, 0]

@@ -293,6 +293,40 @@ def _face_sums(lo, hi, position, velocity, volume, kp, ok, idx, idy, idz, px, py
         _add3_slab(BW, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, fk0, fk1, fwz0, fwz1, k * velocity[q, 2], lo, hi)
 
 
+@njit(cache=True, error_model="numpy")
+def _face_sums_serial(position, velocity, volume, kp, ok, idx, idy, idz, px, py, pz, fold, pair, AU, BU, AV, BV, AW,
+                      BW, KC, EU, EV, EW):
+    """``_face_sums`` over all of x in one pass, without the slab tests (which cost the one-thread deposit
+    0.1–0.2 ms a gas step on ``bubbling-3d``): the serial pass of one thread and of at most ``CHUNK`` particles."""
+    nx, ny, nz = KC.shape
+    for q in range(position.shape[0]):
+        x, y, z = position[q, 0], position[q, 1], position[q, 2]
+        ci0, ci1, cwx0, cwx1, fi0, fi1, fwx0, fwx1 = _axis(x, idx, nx, px, fold)
+        cj0, cj1, cwy0, cwy1, fj0, fj1, fwy0, fwy1 = _axis(y, idy, ny, py, fold)
+        ck0, ck1, cwz0, cwz1, fk0, fk1, fwz0, fwz1 = _axis(z, idz, nz, pz, fold)
+        if pair:  # V_p on the faces of its ∇p interpolation (always folded)
+            gi0, gi1, gwx0, gwx1 = _face_axis(x, idx, nx, px, True)
+            gj0, gj1, gwy0, gwy1 = _face_axis(y, idy, ny, py, True)
+            gk0, gk1, gwz0, gwz1 = _face_axis(z, idz, nz, pz, True)
+            vq = volume[q]
+            _add3(EU, gi0, gi1, gwx0, gwx1, cj0, cj1, cwy0, cwy1, ck0, ck1, cwz0, cwz1, vq)
+            _add3(EV, ci0, ci1, cwx0, cwx1, gj0, gj1, gwy0, gwy1, ck0, ck1, cwz0, cwz1, vq)
+            _add3(EW, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, gk0, gk1, gwz0, gwz1, vq)
+        if not ok[q]:
+            continue
+        k = kp[q]
+        ic = min(max(int(x * idx), 0), nx - 1)
+        jc = min(max(int(y * idy), 0), ny - 1)
+        kc = min(max(int(z * idz), 0), nz - 1)
+        KC[ic, jc, kc] += k
+        _add3(AU, fi0, fi1, fwx0, fwx1, cj0, cj1, cwy0, cwy1, ck0, ck1, cwz0, cwz1, k)
+        _add3(BU, fi0, fi1, fwx0, fwx1, cj0, cj1, cwy0, cwy1, ck0, ck1, cwz0, cwz1, k * velocity[q, 0])
+        _add3(AV, ci0, ci1, cwx0, cwx1, fj0, fj1, fwy0, fwy1, ck0, ck1, cwz0, cwz1, k)
+        _add3(BV, ci0, ci1, cwx0, cwx1, fj0, fj1, fwy0, fwy1, ck0, ck1, cwz0, cwz1, k * velocity[q, 1])
+        _add3(AW, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, fk0, fk1, fwz0, fwz1, k)
+        _add3(BW, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, fk0, fk1, fwz0, fwz1, k * velocity[q, 2])
+
+
 @njit(cache=True, error_model="numpy", parallel=True)
 def _face_sums_parallel(position, velocity, volume, kp, ok, idx, idy, idz, px, py, pz, fold, pair, AU, BU, AV, BV,
                         AW, BW, KC, EU, EV, EW):
@@ -344,8 +378,8 @@ def deposit3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu
         _face_sums_parallel(position, velocity, volume, kp, ok, idx, idy, idz, px, py, pz, fold, pair, AU, BU, AV,
                             BV, AW, BW, KC, EU, EV, EW)
     else:
-        _face_sums(0, nx + 1, position, velocity, volume, kp, ok, idx, idy, idz, px, py, pz, fold, pair, AU, BU, AV,
-                   BV, AW, BW, KC, EU, EV, EW)
+        _face_sums_serial(position, velocity, volume, kp, ok, idx, idy, idz, px, py, pz, fold, pair, AU, BU, AV, BV,
+                          AW, BW, KC, EU, EV, EW)
     _coefficients(AU, BU, VU, beta_u, su)
     _coefficients(AV, BV, VV, beta_v, sv)
     _coefficients(AW, BW, VW, beta_w, sw)

@@ -3,7 +3,9 @@ thread and on two, and the same as the plain serial sums they replace: each sphe
 summed per cell by ``sphere_box_volume`` and added in particle order, each particle's centre cell, K_p and face
 sums, and the gas force per particle. Random packings with spheres straddling cell faces, edges and corners
 and poking through the domain's sides, on walled and on periodic axes; more particles than one work chunk
-(``CHUNK``) so that the parallel passes run."""
+(``CHUNK``) so that the parallel passes run. The sums onto the grid run in x slabs, one per thread, each
+walking all particles in order: the slab split is crossed by many spheres and, on a periodic x axis, by
+wrapped ones, and the slab passes are checked for every number of slabs up to one per x plane."""
 from __future__ import annotations
 
 import math
@@ -181,9 +183,10 @@ def gas_fields(seed=8):
     return u, v, w, eps, rho, p
 
 
-def face_sums_reference(pos, vel, vol, kp, periodic, fold):
+def face_sums_reference(pos, vel, vol, kp, periodic, fold, ok=None):
     """A_f, B_f of the three face directions, Σ K_p of each cell and Σ_p w_pf V_p (∇p weights), added in particle
-    order with the weights of ``_paired3d_kernels._axis``, written out in Python: the serial pass of ``deposit3d``."""
+    order with the weights of ``_paired3d_kernels._axis``, written out in Python: the serial pass of ``deposit3d``
+    (a particle with ok[q] False adds its V_p only)."""
     nx, ny, nz = CELLS
     shapes = [(nx + 1, ny, nz), (nx, ny + 1, nz), (nx, ny, nz + 1)]
     A = [np.zeros(s) for s in shapes]
@@ -209,6 +212,8 @@ def face_sums_reference(pos, vel, vol, kp, periodic, fold):
         add(E[0], gn[0], gw[0], cn[1], cw[1], cn[2], cw[2], vol[q])
         add(E[1], cn[0], cw[0], gn[1], gw[1], cn[2], cw[2], vol[q])
         add(E[2], cn[0], cw[0], cn[1], cw[1], gn[2], gw[2], vol[q])
+        if ok is not None and not ok[q]:
+            continue
         k = kp[q]
         cell = tuple(min(max(int(pos[q, m] * (1.0 / SPACING[m])), 0), CELLS[m] - 1) for m in range(3))
         KC[cell] += k
@@ -222,10 +227,11 @@ def face_sums_reference(pos, vel, vol, kp, periodic, fold):
 
 @pytest.mark.parametrize("periodic", PERIODIC)
 @pytest.mark.parametrize("fold", [True, False])
-def test_deposit3d_and_forces_equal_the_serial_sums(periodic, fold):
+@pytest.mark.parametrize("pair", [True, False])
+def test_deposit3d_and_forces_equal_the_serial_sums(periodic, fold, pair):
     """K_p of the whole set (parallel chunks) == K_p of each particle alone; the face sums, cell sums and pressure
-    voidage == the sums in particle order; the forces (plain and split) == each particle's alone; on 1 and 2
-    threads, with owned scratch and with scratch allocated inside."""
+    voidage (``pair``; untouched without) == the sums in particle order; the forces (plain and split) == each
+    particle's alone; on 1 and 2 threads, with owned scratch and with scratch allocated inside."""
     from fluidem.coupling.drag import drag_laws
     from fluidem.coupling.exchange3d import face_volumes3d
 
@@ -253,10 +259,10 @@ def test_deposit3d_and_forces_equal_the_serial_sums(periodic, fold):
         sums = [np.empty(s) for s in shapes for _ in range(2)]
         KC = np.empty(CELLS)
         coef = [np.empty(s) for s in shapes for _ in range(2)]
-        E = [np.empty(s) for s in shapes]
+        E = [np.full(s, 7.0) for s in shapes]
         extra = (np.empty(N, np.bool_),) if scratch else ()
         bad = P3.deposit3d(law, pos, vel, r, vol, u, v, w, eps, rho, mu, inv_dbar, *SPACING, mv, *periodic, fold, kp,
-                           *sums, KC, *VF, *coef, True, *E, *extra)
+                           *sums, KC, *VF, *coef, pair, *E, *extra)
         assert bad == 0
         return kp, sums, KC, coef, E
 
@@ -270,7 +276,10 @@ def test_deposit3d_and_forces_equal_the_serial_sums(periodic, fold):
             assert np.array_equal(sums[2 * m], A[m]) and np.array_equal(sums[2 * m + 1], B[m])
             assert np.array_equal(coef[2 * m], A[m] / VF[m])
             assert np.array_equal(coef[2 * m + 1], np.where(A[m] > 0.0, B[m] / np.where(A[m] > 0, A[m], 1.0), 0.0))
-            assert np.array_equal(E[m], np.maximum(1.0 - E_ref[m] / VF[m], mv))
+            if pair:
+                assert np.array_equal(E[m], np.maximum(1.0 - E_ref[m] / VF[m], mv))
+            else:
+                assert np.all(E[m] == 7.0)
 
     def forces(split):
         out, total = np.zeros((N, 3)), np.ones((N, 3))
@@ -296,3 +305,103 @@ def test_deposit3d_and_forces_equal_the_serial_sums(periodic, fold):
             got = with_threads(t, forces, split)
             for a in range(3):
                 assert np.array_equal(got[a], ref[a]), (split, t, a)
+
+
+def slab_partitions(nx):
+    """Numbers of x slabs to try: one (the serial pass), two, three and one per x plane."""
+    return sorted({1, min(2, nx), min(3, nx), nx})
+
+
+def touched_x_cells(pos, r, periodic_x):
+    """The wrapped x cells each sphere overlaps (its cell range along x, ``_voidage3d_kernels._cell_range``)."""
+    nx, d = CELLS[0], SPACING[0]
+    out = []
+    for p in range(pos.shape[0]):
+        lo, hi = int(math.floor((pos[p, 0] - r[p]) / d)), int(math.floor((pos[p, 0] + r[p]) / d))
+        if not periodic_x:
+            lo, hi = min(max(lo, 0), nx - 1), min(max(hi, 0), nx - 1)
+        out.append({i % nx for i in range(lo, hi + 1)})
+    return out
+
+
+@pytest.mark.parametrize("nx", [1, 2, 5, 6, 15])
+def test_slabs_hold_every_x_index_once(nx):
+    """The x slabs of m = 1 … nx hold each cell and face index 0 … nx exactly once, in order."""
+    for m in range(1, nx + 1):
+        got = []
+        for s in range(m):
+            lo, hi = VK3.slab_bounds(s, m, nx)
+            assert hi > lo
+            got += list(range(lo, hi))
+        assert got == list(range(nx + 1)), m
+
+
+@pytest.mark.parametrize("periodic", PERIODIC)
+def test_volume_and_centroid_sums_in_any_number_of_slabs(periodic):
+    """The slab passes of the voidage map, run one after the other for 1, 2, 3 and one slab per x plane, == the
+    serial sums; the packing has many spheres across the two-slab split and, with periodic x, across the
+    domain's x side (cell nx − 1 and cell 0, in different slabs)."""
+    pos, r, vel = packing(seed=7)
+    nx = CELLS[0]
+    touched = touched_x_cells(pos, r, periodic[0])
+    split = VK3.slab_bounds(1, 2, nx)[0]
+    assert sum(1 for t in touched if split - 1 in t and split in t) > 50
+    if periodic[0]:
+        assert sum(1 for t in touched if 0 in t and nx - 1 in t) > 50
+    ref = reference_volume(pos, r, vel, periodic)
+    nodes, stride = VK3._volume_layout(r, *SPACING, *CELLS, *periodic)
+    work = np.empty(N * stride)
+    scale = np.ones(N)
+    VK3._volume_range(0, N, pos, r, scale, *SPACING, *CELLS, *periodic, nodes, stride, work)
+    w = 4.0 / 3.0 * math.pi * r**3
+    cells = np.empty(N)
+    VK3._centroid_range(0, N, pos, *SPACING, *CELLS, cells)
+    cref = [np.zeros(CELLS) for _ in range(4)]
+    for p in range(N):
+        c = tuple(cell_index(pos[p, a], 1.0 / SPACING[a], CELLS[a]) for a in range(3))
+        cref[0][c] += w[p]
+        for a in range(3):
+            cref[a + 1][c] += w[p] * vel[p, a]
+    for m in slab_partitions(nx):
+        out = [np.zeros(CELLS) for _ in range(4)]
+        cout = [np.zeros(CELLS) for _ in range(4)]
+        for s in range(m):
+            lo, hi = VK3.slab_bounds(s, m, nx)
+            VK3._volume_add(lo, hi, pos, r, scale, vel, *SPACING, *periodic, nodes, stride, work, *out)
+            VK3._centroid_add(lo, hi, N, w, vel, cells, *cout)
+        for a in range(4):
+            assert np.array_equal(out[a], ref[a]), (m, a)
+            assert np.array_equal(cout[a], cref[a]), (m, a)
+
+
+@pytest.mark.parametrize("periodic", PERIODIC)
+@pytest.mark.parametrize("pair", [True, False])
+def test_face_sums_in_any_number_of_slabs(periodic, pair):
+    """The slab passes of the face deposit (``_paired3d_kernels._face_sums``), one after the other for 1, 2, 3
+    and one slab per x plane, == the sums in particle order, with a tenth of the particles out of drag range
+    (V_p deposited, no K_p); face nx (walls) in the last slab, wrapped faces (periodic) in the first."""
+    pos, r, vel = packing(seed=13)
+    size = np.array(CELLS) * np.array(SPACING)
+    pos = np.ascontiguousarray(np.clip(pos, 0.0, size))
+    vol = 4.0 / 3.0 * math.pi * r**3
+    rng = np.random.default_rng(3)
+    kp = rng.uniform(1e-5, 1e-3, N)
+    ok = rng.uniform(size=N) > 0.1
+    nx, ny, nz = CELLS
+    shapes = [(nx + 1, ny, nz), (nx, ny + 1, nz), (nx, ny, nz + 1)]
+    inv = [1.0 / d for d in SPACING]
+    for fold in (True, False):
+        A, B, KC_ref, E_ref = face_sums_reference(pos, vel, vol, kp, periodic, fold, ok)
+        for m in slab_partitions(nx):
+            AB = [np.zeros(s) for s in shapes for _ in range(2)]
+            KC = np.zeros(CELLS)
+            E = [np.zeros(s) for s in shapes]
+            for s in range(m):
+                lo, hi = VK3.slab_bounds(s, m, nx)
+                P3._face_sums(lo, hi, pos, vel, vol, kp, ok, *inv, *periodic, fold, pair, *AB, KC, *E)
+            assert np.array_equal(KC, KC_ref), (fold, m)
+            for a in range(3):
+                assert np.array_equal(AB[2 * a], A[a]) and np.array_equal(AB[2 * a + 1], B[a]), (fold, m, a)
+                assert np.array_equal(E[a], E_ref[a] if pair else np.zeros(shapes[a])), (fold, m, a)
+            if not periodic[0] and not fold:
+                assert A[0][nx].any()  # the wall face nx, held by the last slab

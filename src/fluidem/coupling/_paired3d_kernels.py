@@ -20,10 +20,15 @@ periodic axes), so Σ_f w_pf = 1 for every particle and face direction.
 ``sample3d``               gas velocity (u, v, w) and voidage at points, the same weights (trilinear).
 
 The per-particle work (each K_p with its interpolation and drag law, each particle's force) runs in chunks
-of ``CHUNK`` particles on Numba's threads (``prange``); ``deposit3d`` then adds the K_p onto the faces in one
-serial pass in particle order (recomputing the weights there: on ``bubbling-3d`` that took half the time of
-keeping them in a scratch array and reading them back). Every number is computed
-as on one thread and added in the same order, so the results are bitwise the same for any number of threads.
+of ``CHUNK`` particles on Numba's threads (``prange``); ``deposit3d`` then adds the K_p onto the faces in
+particle order (recomputing the weights there: on ``bubbling-3d`` that took half the time of keeping them in
+a scratch array and reading them back), on all threads too: the grid is split along x into one slab of
+whole yz planes per thread (``_voidage3d_kernels.slab_count``, ``slab_bounds``: cells and faces of x index
+lo … hi − 1, the face nx in the last slab), and each slab walks all particles in particle order, skips a
+particle none of whose x nodes (centres, faces, ∇p faces, centre cell) lies in it, and adds only the terms
+whose x node does (``_face_sums``). Every face and cell then receives the same numbers, in the same order, as
+in one serial pass, so the results are bitwise the same for any number of threads; at most ``CHUNK``
+particles, or one thread, take the one serial pass.
 """
 import math
 
@@ -32,6 +37,7 @@ from numba import njit, prange
 
 from ._exchange_kernels import _drag_arguments_valid, store_force
 from ._paired_kernels import CHUNK, _centre_axis, _face_axis
+from ._voidage3d_kernels import slab_bounds, slab_count
 from .drag._dispatch import beta_per_solids
 
 
@@ -61,6 +67,21 @@ def _add3(E, i0, i1, a0, a1, j0, j1, b0, b1, k0, k1, c0, c1, q):
     E[i1, j0, k1] += a1 * b0 * c1 * q
     E[i1, j1, k0] += a1 * b1 * c0 * q
     E[i1, j1, k1] += a1 * b1 * c1 * q
+
+
+@njit(cache=True, inline="always")
+def _add3_slab(E, i0, i1, a0, a1, j0, j1, b0, b1, k0, k1, c0, c1, q, lo, hi):
+    """``_add3`` restricted to the x nodes i in [lo, hi): the same products added in the same order."""
+    if lo <= i0 < hi:
+        E[i0, j0, k0] += a0 * b0 * c0 * q
+        E[i0, j0, k1] += a0 * b0 * c1 * q
+        E[i0, j1, k0] += a0 * b1 * c0 * q
+        E[i0, j1, k1] += a0 * b1 * c1 * q
+    if lo <= i1 < hi:
+        E[i1, j0, k0] += a1 * b0 * c0 * q
+        E[i1, j0, k1] += a1 * b0 * c1 * q
+        E[i1, j1, k0] += a1 * b1 * c0 * q
+        E[i1, j1, k1] += a1 * b1 * c1 * q
 
 
 @njit(cache=True, inline="always")
@@ -228,40 +249,57 @@ def _voidage_of(E, VF, min_voidage):
 
 
 @njit(cache=True, error_model="numpy")
-def deposit3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, dx, dy, dz, min_voidage,
-              px, py, pz, fold, kp, AU, BU, AV, BV, AW, BW, KC, VU, VV, VW, beta_u, su, beta_v, sv, beta_w, sw, pair,
-              EU, EV, EW, valid=None):
-    """K_p and the face sums of the ``particle`` exchange on a 3D grid (module docstring); returns the number of
-    particles whose drag arguments are out of range (K_p NaN, nothing deposited for them).
+def _face_sums(lo, hi, position, velocity, volume, kp, ok, idx, idy, idz, px, py, pz, fold, pair, AU, BU, AV, BV, AW,
+               BW, KC, EU, EV, EW):
+    """The face and cell sums of ``deposit3d`` (accumulated into) at the x indices [lo, hi) of cells and faces, in
+    particle order: A_f += w_pf K_p, B_f += w_pf K_p v_p, KC += K_p of the centre's cell and, with ``pair``,
+    E_f += w_pf V_p (∇p weights, boundary faces folded). [0, nx + 1) is the whole serial pass."""
+    nx, ny, nz = KC.shape
+    for q in range(position.shape[0]):
+        x = position[q, 0]
+        ci0, ci1, cwx0, cwx1, fi0, fi1, fwx0, fwx1 = _axis(x, idx, nx, px, fold)
+        gi0, gi1, gwx0, gwx1 = _face_axis(x, idx, nx, px, True)
+        ic = min(max(int(x * idx), 0), nx - 1)
+        good = ok[q]
+        touch = lo <= ci0 < hi or lo <= ci1 < hi
+        if good:
+            touch = touch or lo <= fi0 < hi or lo <= fi1 < hi or lo <= ic < hi
+        if pair:
+            touch = touch or lo <= gi0 < hi or lo <= gi1 < hi
+        if not touch:
+            continue
+        y, z = position[q, 1], position[q, 2]
+        cj0, cj1, cwy0, cwy1, fj0, fj1, fwy0, fwy1 = _axis(y, idy, ny, py, fold)
+        ck0, ck1, cwz0, cwz1, fk0, fk1, fwz0, fwz1 = _axis(z, idz, nz, pz, fold)
+        if pair:  # V_p on the faces of its ∇p interpolation (always folded)
+            gj0, gj1, gwy0, gwy1 = _face_axis(y, idy, ny, py, True)
+            gk0, gk1, gwz0, gwz1 = _face_axis(z, idz, nz, pz, True)
+            vq = volume[q]
+            _add3_slab(EU, gi0, gi1, gwx0, gwx1, cj0, cj1, cwy0, cwy1, ck0, ck1, cwz0, cwz1, vq, lo, hi)
+            _add3_slab(EV, ci0, ci1, cwx0, cwx1, gj0, gj1, gwy0, gwy1, ck0, ck1, cwz0, cwz1, vq, lo, hi)
+            _add3_slab(EW, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, gk0, gk1, gwz0, gwz1, vq, lo, hi)
+        if not good:
+            continue
+        k = kp[q]
+        if lo <= ic < hi:
+            jc = min(max(int(y * idy), 0), ny - 1)
+            kc = min(max(int(z * idz), 0), nz - 1)
+            KC[ic, jc, kc] += k
+        _add3_slab(AU, fi0, fi1, fwx0, fwx1, cj0, cj1, cwy0, cwy1, ck0, ck1, cwz0, cwz1, k, lo, hi)
+        _add3_slab(BU, fi0, fi1, fwx0, fwx1, cj0, cj1, cwy0, cwy1, ck0, ck1, cwz0, cwz1, k * velocity[q, 0], lo, hi)
+        _add3_slab(AV, ci0, ci1, cwx0, cwx1, fj0, fj1, fwy0, fwy1, ck0, ck1, cwz0, cwz1, k, lo, hi)
+        _add3_slab(BV, ci0, ci1, cwx0, cwx1, fj0, fj1, fwy0, fwy1, ck0, ck1, cwz0, cwz1, k * velocity[q, 1], lo, hi)
+        _add3_slab(AW, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, fk0, fk1, fwz0, fwz1, k, lo, hi)
+        _add3_slab(BW, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, fk0, fk1, fwz0, fwz1, k * velocity[q, 2], lo, hi)
 
-    position, velocity : (N, 3); radius, volume, kp : (N,); u, AU, BU, VU, beta_u, su : (nx + 1, ny, nz) and
-    likewise on the y- and z-faces; voidage (ε at the end of the gas step), rho, KC : (nx, ny, nz). A*, B* are
-    overwritten, KC[i, j, k] becomes Σ K_p of the particles whose centre lies in the cell. The gas takes
-    beta_* = A / V_f with the face volumes V* (``exchange3d.face_volumes3d``) and u_s = B / A. ``pair``: EU,
-    EV, EW (face shapes) become the pressure term's voidage 1 − Σ_p w_pf V_p / V_f (clipped below at
-    min_voidage), V_p deposited with the weights of ∇p (boundary faces always folded, as ``_face_gradient3``
-    copies the interior face).
 
-    valid : (N,) bool scratch of the drag checks, allocated here if None or shorter. K_p is computed first (in
-    parallel chunks, ``kp3d``), then added to the faces in particle order."""
-    nx, ny, nz = voidage.shape
-    idx, idy, idz = 1.0 / dx, 1.0 / dy, 1.0 / dz
-    n = position.shape[0]
-    if valid is None:
-        ok = np.empty(n, dtype=np.bool_)
-    elif valid.shape[0] < n:
-        ok = np.empty(n, dtype=np.bool_)
-    else:
-        ok = valid
-    bad = kp3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, dx, dy, dz, min_voidage,
-               px, py, pz, fold, kp, ok)
-    for arr in (AU, BU, AV, BV, AW, BW, KC):
-        arr[:, :, :] = 0.0
-    if pair:
-        EU[:, :, :] = 0.0
-        EV[:, :, :] = 0.0
-        EW[:, :, :] = 0.0
-    for q in range(n):  # the face sums, in particle order
+@njit(cache=True, error_model="numpy")
+def _face_sums_serial(position, velocity, volume, kp, ok, idx, idy, idz, px, py, pz, fold, pair, AU, BU, AV, BV, AW,
+                      BW, KC, EU, EV, EW):
+    """``_face_sums`` over all of x in one pass, without the slab tests (which cost the one-thread deposit
+    0.1–0.2 ms a gas step on ``bubbling-3d``): the serial pass of one thread and of at most ``CHUNK`` particles."""
+    nx, ny, nz = KC.shape
+    for q in range(position.shape[0]):
         x, y, z = position[q, 0], position[q, 1], position[q, 2]
         ci0, ci1, cwx0, cwx1, fi0, fi1, fwx0, fwx1 = _axis(x, idx, nx, px, fold)
         cj0, cj1, cwy0, cwy1, fj0, fj1, fwy0, fwy1 = _axis(y, idy, ny, py, fold)
@@ -287,6 +325,61 @@ def deposit3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu
         _add3(BV, ci0, ci1, cwx0, cwx1, fj0, fj1, fwy0, fwy1, ck0, ck1, cwz0, cwz1, k * velocity[q, 1])
         _add3(AW, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, fk0, fk1, fwz0, fwz1, k)
         _add3(BW, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, fk0, fk1, fwz0, fwz1, k * velocity[q, 2])
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def _face_sums_parallel(position, velocity, volume, kp, ok, idx, idy, idz, px, py, pz, fold, pair, AU, BU, AV, BV,
+                        AW, BW, KC, EU, EV, EW):
+    """``_face_sums`` of each x slab (``_voidage3d_kernels.slab_count``, ``slab_bounds``) on all threads."""
+    nx = KC.shape[0]
+    m = slab_count(nx)
+    for s in prange(m):
+        lo, hi = slab_bounds(s, m, nx)
+        _face_sums(lo, hi, position, velocity, volume, kp, ok, idx, idy, idz, px, py, pz, fold, pair, AU, BU, AV, BV,
+                   AW, BW, KC, EU, EV, EW)
+
+
+@njit(cache=True, error_model="numpy")
+def deposit3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, dx, dy, dz, min_voidage,
+              px, py, pz, fold, kp, AU, BU, AV, BV, AW, BW, KC, VU, VV, VW, beta_u, su, beta_v, sv, beta_w, sw, pair,
+              EU, EV, EW, valid=None):
+    """K_p and the face sums of the ``particle`` exchange on a 3D grid (module docstring); returns the number of
+    particles whose drag arguments are out of range (K_p NaN, nothing deposited for them).
+
+    position, velocity : (N, 3); radius, volume, kp : (N,); u, AU, BU, VU, beta_u, su : (nx + 1, ny, nz) and
+    likewise on the y- and z-faces; voidage (ε at the end of the gas step), rho, KC : (nx, ny, nz). A*, B* are
+    overwritten, KC[i, j, k] becomes Σ K_p of the particles whose centre lies in the cell. The gas takes
+    beta_* = A / V_f with the face volumes V* (``exchange3d.face_volumes3d``) and u_s = B / A. ``pair``: EU,
+    EV, EW (face shapes) become the pressure term's voidage 1 − Σ_p w_pf V_p / V_f (clipped below at
+    min_voidage), V_p deposited with the weights of ∇p (boundary faces always folded, as ``_face_gradient3``
+    copies the interior face).
+
+    valid : (N,) bool scratch of the drag checks, allocated here if None or shorter. K_p is computed first (in
+    parallel chunks, ``kp3d``), then added to the faces in particle order (``_face_sums``, x slabs on all
+    threads)."""
+    nx = voidage.shape[0]
+    idx, idy, idz = 1.0 / dx, 1.0 / dy, 1.0 / dz
+    n = position.shape[0]
+    if valid is None:
+        ok = np.empty(n, dtype=np.bool_)
+    elif valid.shape[0] < n:
+        ok = np.empty(n, dtype=np.bool_)
+    else:
+        ok = valid
+    bad = kp3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, dx, dy, dz, min_voidage,
+               px, py, pz, fold, kp, ok)
+    for arr in (AU, BU, AV, BV, AW, BW, KC):
+        arr[:, :, :] = 0.0
+    if pair:
+        EU[:, :, :] = 0.0
+        EV[:, :, :] = 0.0
+        EW[:, :, :] = 0.0
+    if n > CHUNK and slab_count(nx) > 1:
+        _face_sums_parallel(position, velocity, volume, kp, ok, idx, idy, idz, px, py, pz, fold, pair, AU, BU, AV,
+                            BV, AW, BW, KC, EU, EV, EW)
+    else:
+        _face_sums_serial(position, velocity, volume, kp, ok, idx, idy, idz, px, py, pz, fold, pair, AU, BU, AV, BV,
+                          AW, BW, KC, EU, EV, EW)
     _coefficients(AU, BU, VU, beta_u, su)
     _coefficients(AV, BV, VV, beta_v, sv)
     _coefficients(AW, BW, VW, beta_w, sw)

@@ -26,14 +26,25 @@ eight corners from those values, in the order and with the signs of ``sphere_box
 volume is bitwise the one ``sphere_box_volume`` gives while a node shared by several cells is evaluated
 once (a sphere across three cell faces: 27 nodes instead of 8 × 8 corners). The per-particle work (the
 node values and each cell's volume; for the centroid map each particle's cell) is done first, in chunks of
-``CHUNK`` particles on Numba's threads (``prange``), into a scratch array ``work``; the sums onto the grid
-follow in one serial pass in particle order. Every number is computed as on one thread and added in the same
-order, so the maps are bitwise the same for any number of threads.
+``CHUNK`` particles on Numba's threads (``prange``), into a scratch array ``work``. The sums onto the grid
+follow in particle order, on all threads too: the grid is split along x (its first index, so that each part is
+one contiguous block of every grid array) into one slab of whole yz planes per thread (``slab_count``,
+``slab_bounds``), and each slab walks all particles in particle order and adds only the cells whose wrapped x
+index lies in it (``_volume_add``). Every cell then receives the same numbers, in the same order, as in one serial pass over
+all particles, so the maps are bitwise the same for any number of threads. At most ``CHUNK`` particles, or
+one thread, take the one serial pass.
 """
 import math
 
+import numba
 import numpy as np
 from numba import njit, prange
+
+try:  # Numba's own intrinsic for the thread count, which its parallel regions use: a kernel calling it can be
+    # cached, while one calling ``numba.get_num_threads`` (a ctypes pointer) cannot
+    from numba.np.ufunc.parallel import _iget_num_threads as _num_threads
+except ImportError:  # pragma: no cover - a Numba without it: the same number, uncached
+    _num_threads = numba.get_num_threads
 
 from ._voidage_kernels import cell_index
 
@@ -347,12 +358,51 @@ def _volume_parallel(position, radius, scale, dx, dy, dz, nx, ny, nz, px, py, pz
                       nodes, stride, work)
 
 
+@njit(cache=True, inline="always")
+def slab_count(nx):
+    """Number of x slabs of the parallel grid sums: one per thread (Numba's ``get_num_threads``), at most nx.
+    Called only in kernels that call a ``parallel=True`` one too, which starts Numba's threads when it is
+    loaded from the cache."""
+    return max(1, min(_num_threads(), nx))
+
+
+@njit(cache=True, inline="always")
+def slab_bounds(s, m, nx):
+    """[lo, hi) of the x indices of slab s of m: cells and faces lo … hi − 1, the last slab with the face
+    nx too (``hi`` = nx + 1), so that every cell and face index along x belongs to exactly one slab."""
+    lo = (s * nx) // m
+    hi = ((s + 1) * nx) // m
+    if s == m - 1:
+        hi = nx + 1
+    return lo, hi
+
+
+@njit(cache=True, inline="always")
+def _x_range_meets(x, r, dx, nx, px, lo, hi):
+    """Whether a wrapped x index of the cells [a0, a1] of ``_cell_range`` (those ``_volume_range`` and
+    ``_volume_add`` take for a sphere at x of radius r) lies in [lo, hi)."""
+    a0, a1 = _cell_range(x, r, dx, nx, px)
+    if a1 - a0 + 1 >= nx:
+        return True
+    w0 = a0 % nx
+    w1 = a1 % nx
+    if w0 <= w1:
+        return w0 < hi and w1 >= lo
+    return w0 < hi or w1 >= lo  # [w0, nx − 1] and [0, w1]
+
+
 @njit(cache=True)
-def _volume_add(position, radius, scale, velocity, dx, dy, dz, px, py, pz, nodes, stride, work, out, ovx, ovy, ovz):
-    """The serial pass of ``volume_deposit``: the cells of ``_volume_range`` added in particle order (a sphere
-    with the count −1 by ``sphere_box_volume`` of each cell, as the deposit was before node values)."""
+def _volume_add(lo, hi, position, radius, scale, velocity, dx, dy, dz, px, py, pz, nodes, stride, work, out, ovx,
+                ovy, ovz):
+    """The sums of ``volume_deposit`` onto the cells whose (wrapped) x index lies in [lo, hi): the cells of
+    ``_volume_range`` added in particle order (a sphere with the count −1 by ``sphere_box_volume`` of each
+    cell, as the deposit was before node values); a sphere whose x cell range misses the slab is skipped from
+    its position (``_x_range_meets``). [0, nx) is the whole serial pass."""
     nx, ny, nz = out.shape
+    whole = lo <= 0 and hi >= nx
     for p in range(position.shape[0]):
+        if not whole and not _x_range_meets(position[p, 0], radius[p], dx, nx, px, lo, hi):
+            continue  # none of its cells in the slab: its scratch is not read
         e = p * stride + nodes
         m = int(work[e])
         vx = velocity[p, 0]
@@ -362,6 +412,8 @@ def _volume_add(position, radius, scale, velocity, dx, dy, dz, px, py, pz, nodes
             for q in range(m):
                 f = e + 1 + 4 * q
                 i = int(work[f])
+                if i < lo or i >= hi:
+                    continue
                 j = int(work[f + 1])
                 k = int(work[f + 2])
                 v = work[f + 3]
@@ -378,6 +430,9 @@ def _volume_add(position, radius, scale, velocity, dx, dy, dz, px, py, pz, nodes
         b0, b1 = _cell_range(y, r, dy, ny, py)
         c0, c1 = _cell_range(z, r, dz, nz, pz)
         for i in range(a0, a1 + 1):
+            ii = i % nx
+            if ii < lo or ii >= hi:
+                continue
             xl, xh = _bounds(i, dx, nx, px)
             for j in range(b0, b1 + 1):
                 yl, yh = _bounds(j, dy, ny, py)
@@ -386,11 +441,23 @@ def _volume_add(position, radius, scale, velocity, dx, dy, dz, px, py, pz, nodes
                     v = sphere_box_volume(x, y, z, r, xl, xh, yl, yh, zl, zh)
                     if v > 0.0:
                         v *= scale[p]
-                        ii, jj, kk = i % nx, j % ny, k % nz
+                        jj, kk = j % ny, k % nz
                         out[ii, jj, kk] += v
                         ovx[ii, jj, kk] += v * vx
                         ovy[ii, jj, kk] += v * vy
                         ovz[ii, jj, kk] += v * vz
+
+
+@njit(cache=True, parallel=True)
+def _volume_add_parallel(position, radius, scale, velocity, dx, dy, dz, px, py, pz, nodes, stride, work, out, ovx,
+                         ovy, ovz):
+    """``_volume_add`` of each x slab (``slab_count``, ``slab_bounds``) on all threads."""
+    nx = out.shape[0]
+    m = slab_count(nx)
+    for s in prange(m):
+        lo, hi = slab_bounds(s, m, nx)
+        _volume_add(lo, hi, position, radius, scale, velocity, dx, dy, dz, px, py, pz, nodes, stride, work, out, ovx,
+                    ovy, ovz)
 
 
 @njit(cache=True)
@@ -413,7 +480,12 @@ def volume_deposit(position, radius, scale, velocity, dx, dy, dz, px, py, pz, ou
         _volume_parallel(position, radius, scale, dx, dy, dz, nx, ny, nz, px, py, pz, nodes, stride, buf)
     else:
         _volume_range(0, n, position, radius, scale, dx, dy, dz, nx, ny, nz, px, py, pz, nodes, stride, buf)
-    _volume_add(position, radius, scale, velocity, dx, dy, dz, px, py, pz, nodes, stride, buf, out, ovx, ovy, ovz)
+    if n > CHUNK and slab_count(nx) > 1:
+        _volume_add_parallel(position, radius, scale, velocity, dx, dy, dz, px, py, pz, nodes, stride, buf, out, ovx,
+                             ovy, ovz)
+    else:
+        _volume_add(0, nx, position, radius, scale, velocity, dx, dy, dz, px, py, pz, nodes, stride, buf, out, ovx,
+                    ovy, ovz)
 
 
 @njit(cache=True)
@@ -436,6 +508,38 @@ def _centroid_parallel(position, dx, dy, dz, nx, ny, nz, cells):
 
 
 @njit(cache=True)
+def _centroid_add(lo, hi, n, weight, velocity, cells, out, ovx, ovy, ovz):
+    """The sums of ``centroid_deposit3d`` onto the cells whose x index lies in [lo, hi), in particle order
+    (cells of ``_centroid_range``) of the particles 0 … n − 1; [0, nx) is the whole serial pass."""
+    nx, ny, nz = out.shape
+    nyz = ny * nz
+    first = lo * nyz
+    last = min(hi, nx) * nyz
+    for p in range(n):
+        c = int(cells[p])
+        if c < first or c >= last:
+            continue
+        i = c // nyz
+        j = (c - i * nyz) // nz
+        k = c - i * nyz - j * nz
+        w = weight[p]
+        out[i, j, k] += w
+        ovx[i, j, k] += w * velocity[p, 0]
+        ovy[i, j, k] += w * velocity[p, 1]
+        ovz[i, j, k] += w * velocity[p, 2]
+
+
+@njit(cache=True, parallel=True)
+def _centroid_add_parallel(n, weight, velocity, cells, out, ovx, ovy, ovz):
+    """``_centroid_add`` of each x slab (``slab_count``, ``slab_bounds``) on all threads."""
+    nx = out.shape[0]
+    m = slab_count(nx)
+    for s in prange(m):
+        lo, hi = slab_bounds(s, m, nx)
+        _centroid_add(lo, hi, n, weight, velocity, cells, out, ovx, ovy, ovz)
+
+
+@njit(cache=True)
 def centroid_deposit3d(position, weight, velocity, dx, dy, dz, out, ovx, ovy, ovz, work=None):
     """Add weight[p] (and weight[p] v[p]) to the cell holding the centre of particle p (Sun 2007 eq. 34 in 3D);
     centres outside count in the nearest edge cell. out, ovx, ovy, ovz : (nx, ny, nz), accumulated into.
@@ -452,17 +556,10 @@ def centroid_deposit3d(position, weight, velocity, dx, dy, dz, out, ovx, ovy, ov
         _centroid_parallel(position, dx, dy, dz, nx, ny, nz, cells)
     else:
         _centroid_range(0, n, position, dx, dy, dz, nx, ny, nz, cells)
-    nyz = ny * nz
-    for p in range(n):
-        c = int(cells[p])
-        i = c // nyz
-        j = (c - i * nyz) // nz
-        k = c - i * nyz - j * nz
-        w = weight[p]
-        out[i, j, k] += w
-        ovx[i, j, k] += w * velocity[p, 0]
-        ovy[i, j, k] += w * velocity[p, 1]
-        ovz[i, j, k] += w * velocity[p, 2]
+    if n > CHUNK and slab_count(nx) > 1:
+        _centroid_add_parallel(n, weight, velocity, cells, out, ovx, ovy, ovz)
+    else:
+        _centroid_add(0, nx, n, weight, velocity, cells, out, ovx, ovy, ovz)
 
 
 @njit(cache=True)

@@ -235,34 +235,48 @@ def _face_ghost_threads(W, flags, q, nx, ny, nz):
 
 @njit(cache=True, error_model="numpy")
 def _face_ghost_lines(W, flags, a, q, s0, s1, nx, ny, nz):
-    """Pass ``q`` of ``fill_face_ghosts`` for direction ``a``, lines s0 <= s < s1."""
+    """Pass ``q`` of ``fill_face_ghosts`` for direction ``a``, lines s0 <= s < s1. The faces are addressed by
+    their flat offsets in ``W[a]`` and ``flags`` (strides of the axes d, e1, e2 of the pass) and the wrapped
+    source rows of a periodic side are taken once per pass: the same values written in the same order as
+    with (x, y, z) indices, without a branch on the axis and an integer division per face. W and flags are
+    the solver's own C-contiguous arrays (``W[a].ravel()`` is then a view)."""
     N = (nx, ny, nz)
     Wa = W[a]
+    Wf = Wa.ravel()  # a view: W[a] is contiguous
+    Ff = flags.ravel()
     d = (a + 1 + q) % 3  # the tangential axes first, the normal axis a last
     e1, e2 = (d + 1) % 3, (d + 2) % 3
     n = N[d]
+    ws = (Wa.shape[1] * Wa.shape[2], Wa.shape[2], 1)
+    fs = (flags.shape[1] * flags.shape[2], flags.shape[2], 1)
+    sd, se1, se2 = ws[d], ws[e1], ws[e2]
+    fd, fe1, fe2 = fs[d], fs[e1], fs[e2]
     ext1 = N[e1] + 4 + (1 if e1 == a else 0)
     ext2 = N[e2] + 4 + (1 if e2 == a else 0)
+    lo1, lo2 = (2 + (n - 1) % n) * sd, (2 + (n - 2) % n) * sd  # wrapped rows of the low ghosts, k = 1, 2
+    th1, th2 = 2 * sd, (2 + 1 % n) * sd  # of the high tangential ghosts: 2 + (k - 1) % n
+    nh1, nh2 = (2 + 1 % n) * sd, (2 + 2 % n) * sd  # of the high normal ghosts: 2 + k % n
+    m1, m2 = N[e1] - 1, N[e2] - 1
     for s in range(max(s0, 0), min(s1, ext1)):
-        cs = min(max(s - 2, 0), N[e1] - 1) + 1
+        cs = min(max(s - 2, 0), m1) + 1
         for t in range(ext2):
-            ct = min(max(t - 2, 0), N[e2] - 1) + 1
-            flo = flags[at(d, 0, cs, ct)]
-            fhi = flags[at(d, n + 1, cs, ct)]
-            if d != a:
-                for k in range(1, 3):
-                    Wa[at(d, 2 - k, s, t)] = _tangential(flo, Wa[at(d, 1 + k, s, t)],
-                                                         Wa[at(d, 2 + (n - k) % n, s, t)])
-                    Wa[at(d, n + 1 + k, s, t)] = _tangential(fhi, Wa[at(d, n + 2 - k, s, t)],
-                                                             Wa[at(d, 2 + (k - 1) % n, s, t)])
+            ct = min(max(t - 2, 0), m2) + 1
+            b = s * se1 + t * se2
+            fb = cs * fe1 + ct * fe2
+            flo = Ff[fb]
+            fhi = Ff[fb + (n + 1) * fd]
+            if d != a:  # k = 1 low and high, then k = 2 (which may read a k = 1 ghost when n = 1)
+                Wf[b + sd] = _tangential(flo, Wf[b + 2 * sd], Wf[b + lo1])
+                Wf[b + (n + 2) * sd] = _tangential(fhi, Wf[b + (n + 1) * sd], Wf[b + th1])
+                Wf[b] = _tangential(flo, Wf[b + 3 * sd], Wf[b + lo2])
+                Wf[b + (n + 3) * sd] = _tangential(fhi, Wf[b + n * sd], Wf[b + th2])
             else:
                 if fhi == PERIODIC:
-                    Wa[at(d, n + 2, s, t)] = Wa[at(d, 2, s, t)]
-                for k in range(1, 3):
-                    Wa[at(d, 2 - k, s, t)] = _normal(flo, Wa[at(d, 2, s, t)], Wa[at(d, 2 + k, s, t)],
-                                                     Wa[at(d, 2 + (n - k) % n, s, t)])
-                    Wa[at(d, n + 2 + k, s, t)] = _normal(fhi, Wa[at(d, n + 2, s, t)],
-                                                         Wa[at(d, n + 2 - k, s, t)], Wa[at(d, 2 + k % n, s, t)])
+                    Wf[b + (n + 2) * sd] = Wf[b + 2 * sd]
+                Wf[b + sd] = _normal(flo, Wf[b + 2 * sd], Wf[b + 3 * sd], Wf[b + lo1])
+                Wf[b + (n + 3) * sd] = _normal(fhi, Wf[b + (n + 2) * sd], Wf[b + (n + 1) * sd], Wf[b + nh1])
+                Wf[b] = _normal(flo, Wf[b + 2 * sd], Wf[b + 4 * sd], Wf[b + lo2])
+                Wf[b + (n + 4) * sd] = _normal(fhi, Wf[b + (n + 2) * sd], Wf[b + n * sd], Wf[b + nh2])
 
 
 # ---------------------------------------------------------------------------- centre values

@@ -1,6 +1,7 @@
 """The 3D coupling kernels (_voidage3d_kernels, _paired3d_kernels) give bitwise (==) the same numbers on one
 thread and on two, and the same as the plain serial sums they replace: each sphere's exact volume in each cell
-summed per cell by ``sphere_box_volume`` and added in particle order, each particle's centre cell, K_p and face
+(as ``_volume_range`` gives it for that sphere alone, itself ``sphere_box_volume`` of the cell to round-off)
+added in particle order, each particle's centre cell, K_p and face
 sums, and the gas force per particle. Random packings with spheres straddling cell faces, edges and corners
 and poking through the domain's sides, on walled and on periodic axes; more particles than one work chunk
 (``CHUNK``) so that the parallel passes run. The sums onto the grid run in x slabs, one per thread, each
@@ -40,11 +41,11 @@ def packing(seed=5, dmax=1.8e-3):
     return np.ascontiguousarray(pos), r, vel
 
 
-def reference_volume(pos, r, vel, periodic):
-    """Each sphere's exact volume in each cell it overlaps (``sphere_box_volume``), added to the cells in particle
-    order: the serial deposit of the volume map before it kept node values."""
+def box_volume_cells(pos, r, periodic):
+    """Each sphere's exact volume in each cell it overlaps by ``sphere_box_volume`` of the cell's box: a dict
+    {(i, j, k) wrapped: V} per sphere (the cells with V > 0)."""
     nx, ny, nz = CELLS
-    out = [np.zeros(CELLS) for _ in range(4)]
+    out = []
     for p in range(pos.shape[0]):
         rng_ = []
         for a in range(3):
@@ -54,11 +55,10 @@ def reference_volume(pos, r, vel, periodic):
                 lo, hi = min(max(lo, 0), n - 1), min(max(hi, 0), n - 1)
             rng_.append((lo, hi))
         (a0, a1), (b0, b1), (c0, c1) = rng_
+        cells = {}
         if a0 == a1 and b0 == b1 and c0 == c1:
-            v = 1.0 * 4.0 / 3.0 * math.pi * r[p] * r[p] * r[p]
-            cells = [((a0 % nx, b0 % ny, c0 % nz), v)]
+            cells[(a0 % nx, b0 % ny, c0 % nz)] = 4.0 / 3.0 * math.pi * r[p] * r[p] * r[p]
         else:
-            cells = []
             for i in range(a0, a1 + 1):
                 for j in range(b0, b1 + 1):
                     for k in range(c0, c1 + 1):
@@ -72,7 +72,35 @@ def reference_volume(pos, r, vel, periodic):
                             b += [lo, hi]
                         v = VK3.sphere_box_volume(pos[p, 0], pos[p, 1], pos[p, 2], r[p], *b)
                         if v > 0.0:
-                            cells.append(((i % nx, j % ny, k % nz), v * 1.0))
+                            c = (i % nx, j % ny, k % nz)
+                            cells[c] = cells.get(c, 0.0) + v
+        out.append(cells)
+    return out
+
+
+def sphere_cells(pos, r, periodic):
+    """Each sphere's cells and volumes as ``_volume_range`` gives them for that sphere alone (a list of
+    ((i, j, k), V) per sphere, in its order; ``sphere_box_volume`` per cell where it has none: count −1)."""
+    nodes, stride = VK3._volume_layout(r, *SPACING, *CELLS, *periodic)
+    work = np.empty(stride)
+    out = []
+    for p in range(pos.shape[0]):
+        VK3._volume_range(0, 1, pos[p:p + 1], r[p:p + 1], np.ones(1), *SPACING, *CELLS, *periodic, nodes, stride,
+                          work)
+        m = int(work[nodes])
+        if m < 0:
+            out.append(list(box_volume_cells(pos[p:p + 1], r[p:p + 1], periodic)[0].items()))
+            continue
+        out.append([((int(work[nodes + 1 + 4 * q]), int(work[nodes + 2 + 4 * q]), int(work[nodes + 3 + 4 * q])),
+                     work[nodes + 4 + 4 * q]) for q in range(m)])
+    return out
+
+
+def reference_volume(pos, r, vel, periodic):
+    """The volume map as one plain serial pass: each sphere's cell volumes (``sphere_cells``, each sphere
+    alone) added to the cells in particle order."""
+    out = [np.zeros(CELLS) for _ in range(4)]
+    for p, cells in enumerate(sphere_cells(pos, r, periodic)):
         for c, v in cells:
             out[0][c] += v
             for a in range(3):
@@ -104,8 +132,8 @@ def centroid_map(pos, w, vel, work):
 
 @pytest.mark.parametrize("periodic", PERIODIC)
 def test_volume_deposit_equals_the_serial_sums(periodic):
-    """Node values summed per cell == ``sphere_box_volume`` per cell, on 1 and 2 threads, with an owned scratch,
-    a scratch allocated inside (None) and one too short (allocated inside too)."""
+    """The parallel deposit == the cells of each sphere alone added in particle order, on 1 and 2 threads, with
+    an owned scratch, a scratch allocated inside (None) and one too short (allocated inside too)."""
     pos, r, vel = packing()
     ref = reference_volume(pos, r, vel, periodic)
     stride = VK3.volume_stride(r, *SPACING, *CELLS, *periodic)
@@ -118,6 +146,24 @@ def test_volume_deposit_equals_the_serial_sums(periodic):
     straddling = sum(1 for p in range(N) if np.any(np.floor((pos[p] - r[p]) / SPACING) !=
                                                    np.floor((pos[p] + r[p]) / SPACING)))
     assert straddling > N // 2  # the test is about spheres cut by cell faces
+
+
+@pytest.mark.parametrize("periodic", PERIODIC)
+@pytest.mark.parametrize("dmax", [1.8e-3, 6.0e-3])
+def test_cell_volumes_of_each_sphere_are_the_box_volumes(periodic, dmax):
+    """Each sphere's cell volumes (at most one face per axis inside it: the volumes beyond the faces combined;
+    more: the node values) are ``sphere_box_volume`` of each cell's box to round-off (1e-14 of the sphere) and
+    add up to the sphere."""
+    pos, r, vel = packing(seed=9 if dmax > 2e-3 else 5, dmax=dmax)
+    got, ref = sphere_cells(pos, r, periodic), box_volume_cells(pos, r, periodic)
+    for p in range(N):
+        vp = 4.0 / 3.0 * math.pi * r[p] ** 3
+        cells = {}
+        for c, v in got[p]:
+            cells[c] = cells.get(c, 0.0) + v
+        for c in set(cells) | set(ref[p]):
+            assert abs(cells.get(c, 0.0) - ref[p].get(c, 0.0)) <= 1e-14 * vp, (p, c)
+        assert sum(cells.values()) == pytest.approx(vp, rel=1e-13)
 
 
 def test_volume_deposit_spheres_larger_than_a_cell():

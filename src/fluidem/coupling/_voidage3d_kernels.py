@@ -21,10 +21,14 @@ few transcendental calls per cell corner. Octants with a negative bound are redu
 by the sphere's mirror symmetry (1_{x > a} = 1 − 1_{−x > −a}); an unbounded axis leaves a spherical cap
 (two unbounded) or twice the octant at a = 0 (one unbounded).
 
-``volume_deposit`` evaluates ``corner_volume`` once per grid node around a sphere and sums each cell's
-eight corners from those values, in the order and with the signs of ``sphere_box_volume``, so each cell's
-volume is bitwise the one ``sphere_box_volume`` gives while a node shared by several cells is evaluated
-once (a sphere across three cell faces: 27 nodes instead of 8 × 8 corners). The per-particle work (the
+``volume_deposit`` takes most spheres by a shorter road. A sphere under a cell across has at most one cell
+face inside it per axis; with W(T) its volume beyond the faces of the axes in T (the whole sphere, a spherical
+cap, twice an octant volume at 0 on the free axis, an octant volume), the cell beyond the faces of H and on
+the centre's side of the others holds Σ_{H ⊆ T} (−1)^{|T| − |H|} W(T) (``_split_cells``): one octant volume at
+most instead of eight cell corners, the same volumes to round-off. Other spheres evaluate ``corner_volume``
+once per grid node around them and sum each cell's eight corners from those values, in the order and with
+the signs of ``sphere_box_volume`` (bitwise its volume), so that a node shared by several cells is evaluated
+once (a sphere across three faces of each axis: 64 nodes instead of 27 × 8 corners). The per-particle work (the
 node values and each cell's volume; for the centroid map each particle's cell) is done first, in chunks of
 ``CHUNK`` particles on Numba's threads (``prange``), into a scratch array ``work``. The sums onto the grid
 follow in particle order, on all threads too: the grid is split along x (its first index, so that each part is
@@ -77,6 +81,8 @@ def octant_volume(a, b, c, r):
     if a * a + b * b + c * c >= r * r:
         return 0.0
     zm = math.sqrt(r * r - a * a - b * b)
+    if c == 0.0:  # the primitive is 0 (to the sign) at z = 0
+        return _corner_primitive(zm, a, b, r, b, a)
     wa = math.sqrt(max(r * r - a * a - c * c, 0.0))
     wb = math.sqrt(max(r * r - b * b - c * c, 0.0))
     return _corner_primitive(zm, a, b, r, b, a) - _corner_primitive(c, a, b, r, wa, wb)
@@ -138,47 +144,75 @@ def corner_volume(a, b, c, r):
 
 
 @njit(cache=True, inline="always")
-def _bounded_given(a, b, c, ua, ub, uc, r, o3, oa, ob, oc):
-    """``_bounded_volume`` with its octant volumes given: o3 = ``octant_volume``(a, b, c), oa = 2 ``octant_volume``(0,
-    b, c) (a unbounded), ob = 2 ``octant_volume``(0, a, c), oc = 2 ``octant_volume``(0, a, b), for the one bound
-    each axis can have (``_volume_range``)."""
-    k = int(ua) + int(ub) + int(uc)
-    if k == 3:
-        return 4.0 / 3.0 * math.pi * r * r * r
-    if k == 2:
-        h = c if not uc else (b if not ub else a)
-        return math.pi * (r - h) * (r - h) * (2.0 * r + h) / 3.0  # spherical cap beyond h
-    if k == 1:
-        if ua:
-            return oa
-        if ub:
-            return ob
-        return oc
-    return o3
+def _cap(h, r):
+    """Volume [m³] of the sphere of radius r beyond a plane at distance h ∈ [0, r] from its centre."""
+    return math.pi * (r - h) * (r - h) * (2.0 * r + h) / 3.0
+
+
+@njit(cache=True, inline="always")
+def _beyond(t, wx, wy, wz, wxy, wxz, wyz, wxyz, whole):
+    """Volume beyond the faces of the axes in t (bits 1 x, 2 y, 4 z) of ``_split_cells``."""
+    if t == 0:
+        return whole
+    if t == 1:
+        return wx
+    if t == 2:
+        return wy
+    if t == 4:
+        return wz
+    if t == 3:
+        return wxy
+    if t == 5:
+        return wxz
+    if t == 6:
+        return wyz
+    return wxyz
 
 
 @njit(cache=True)
-def _corner_given(a, b, c, r, o3, oa, ob, oc):
-    """``corner_volume`` (the same terms, signs and order) with its octant volumes given (``_bounded_given``): exact
-    where each of a, b, c is either the one bound of its axis or at most −r (unbounded)."""
-    na, sa0, va0, ua0, sa1, va1, ua1 = _terms(a, r)
-    nb, sb0, vb0, ub0, sb1, vb1, ub1 = _terms(b, r)
-    nc, sc0, vc0, uc0, sc1, vc1, uc1 = _terms(c, r)
-    total = 0.0
-    for i in range(na):
-        s_i = sa0 if i == 0 else sa1
-        v_i = va0 if i == 0 else va1
-        u_i = ua0 if i == 0 else ua1
-        for j in range(nb):
-            s_j = sb0 if j == 0 else sb1
-            v_j = vb0 if j == 0 else vb1
-            u_j = ub0 if j == 0 else ub1
-            for k in range(nc):
-                s_k = sc0 if k == 0 else sc1
-                v_k = vc0 if k == 0 else vc1
-                u_k = uc0 if k == 0 else uc1
-                total += s_i * s_j * s_k * _bounded_given(v_i, v_j, v_k, u_i, u_j, u_k, r, o3, oa, ob, oc)
-    return total
+def _split_cells(af, bf, cf, hx, hy, hz, lx, ly, lz, ux, uy, uz, r, scale, work, f):
+    """The cells of a sphere of radius r that has at most one face inside it per axis (``_volume_range``) and
+    their volumes, as (i, j, k, scale V) into work[f], work[f + 4] …; returns their number. hx: the x axis has
+    a face, at signed distance af from the centre, between the cells lx (below) and ux (above); without one the
+    sphere is in cell lx along x (the same for y and z).
+
+    With W(T) the volume beyond the faces of the axes in T (on the side away from the centre: W(∅) the sphere,
+    one face a spherical cap, two faces twice the octant volume at 0 on the free axis, three faces the octant
+    volume of the module docstring), the cell beyond the faces of H and on the centre's side of the others has
+    V = Σ_{H ⊆ T ⊆ F} (−1)^{|T| − |H|} W(T) (inclusion–exclusion, F the axes with a face): the same volumes as
+    ``sphere_box_volume`` to round-off, with one octant volume at most (it takes eight cell corners)."""
+    da, db, dc = abs(af), abs(bf), abs(cf)
+    whole = 4.0 / 3.0 * math.pi * r * r * r
+    wx = _cap(da, r) if hx else 0.0
+    wy = _cap(db, r) if hy else 0.0
+    wz = _cap(dc, r) if hz else 0.0
+    wxy = 2.0 * octant_volume(da, db, 0.0, r) if hx and hy else 0.0
+    wxz = 2.0 * octant_volume(da, dc, 0.0, r) if hx and hz else 0.0
+    wyz = 2.0 * octant_volume(db, dc, 0.0, r) if hy and hz else 0.0
+    wxyz = octant_volume(da, db, dc, r) if hx and hy and hz else 0.0
+    faces = (1 if hx else 0) | (2 if hy else 0) | (4 if hz else 0)
+    m = 0
+    for h in range(8):
+        if h & faces != h:
+            continue
+        v = 0.0
+        for t in range(8):
+            if t & faces != t or t & h != h:
+                continue
+            extra = (t ^ h)
+            sign = -1.0 if ((extra & 1) + ((extra >> 1) & 1) + ((extra >> 2) & 1)) % 2 == 1 else 1.0
+            v += sign * _beyond(t, wx, wy, wz, wxy, wxz, wyz, wxyz, whole)
+        if v > 0.0:
+            # beyond a face at af ≥ 0 is the cell above it, beyond one at af < 0 the cell below
+            i = lx if not hx else (ux if (h & 1 != 0) == (af >= 0.0) else lx)
+            j = ly if not hy else (uy if (h & 2 != 0) == (bf >= 0.0) else ly)
+            k = lz if not hz else (uz if (h & 4 != 0) == (cf >= 0.0) else lz)
+            work[f + 4 * m] = i
+            work[f + 4 * m + 1] = j
+            work[f + 4 * m + 2] = k
+            work[f + 4 * m + 3] = scale * v
+            m += 1
+    return m
 
 
 @njit(cache=True)
@@ -276,8 +310,9 @@ def _volume_range(lo, hi, position, radius, scale, dx, dy, dz, nx, ny, nz, px, p
     overlaps at (mx nb + my) nc + mz (0 without a call where the node lies beyond the sphere along an axis,
     which is what ``corner_volume`` returns there), then at ``nodes`` the number of cells with V_pc > 0 and
     (i, j, k, scale[p] V_pc) of each, i, j, k wrapped: V_pc the Σ ± of its eight corners in the order and with
-    the signs of ``sphere_box_volume``. A sphere inside one cell has the one cell and its whole volume; one
-    whose nodes do not fit has the count −1 (``_volume_add`` then takes ``sphere_box_volume``)."""
+    the signs of ``sphere_box_volume``. A sphere inside one cell has the one cell and its whole volume, one with
+    at most one cell face inside it per axis the cells of ``_split_cells`` (no node values); one whose nodes do
+    not fit has the count −1 (``_volume_add`` then takes ``sphere_box_volume``)."""
     for p in range(lo, hi):
         r = radius[p]
         x = position[p, 0]
@@ -300,23 +335,17 @@ def _volume_range(lo, hi, position, radius, scale, dx, dy, dz, nx, ny, nz, px, p
             work[e] = -1.0
             continue
         # at most two cells per axis (a sphere under a cell across) whose first node lies at or beyond −r and
-        # last at or beyond r (as they do but where round-off puts a node on the sphere): each axis has one
-        # bound, its inner face, and the octant volumes of those bounds are taken once for all the nodes
-        few = (na <= 3 and nb <= 3 and nc <= 3 and _outside(a0, na, x, r, dx, nx, px)
-               and _outside(b0, nb, y, r, dy, ny, py) and _outside(c0, nc, z, r, dz, nz, pz))
-        o3 = oa = ob = oc = 0.0
-        if few:
+        # last at or beyond r (as they do but where round-off puts a node on the sphere): each axis has at most
+        # one face inside the sphere, and the cells' volumes follow from the volumes beyond those faces
+        # (``_split_cells``) without node values
+        if (na <= 3 and nb <= 3 and nc <= 3 and _outside(a0, na, x, r, dx, nx, px)
+                and _outside(b0, nb, y, r, dy, ny, py) and _outside(c0, nc, z, r, dz, nz, pz)):
             af = _node(a0, 1, dx, nx, px) - x if na == 3 else r
             bf = _node(b0, 1, dy, ny, py) - y if nb == 3 else r
             cf = _node(c0, 1, dz, nz, pz) - z if nc == 3 else r
-            if af < r and bf < r and cf < r:
-                o3 = octant_volume(abs(af), abs(bf), abs(cf), r)
-            if bf < r and cf < r:
-                oa = 2.0 * octant_volume(0.0, abs(bf), abs(cf), r)
-            if af < r and cf < r:
-                ob = 2.0 * octant_volume(0.0, abs(af), abs(cf), r)
-            if af < r and bf < r:
-                oc = 2.0 * octant_volume(0.0, abs(af), abs(bf), r)
+            work[e] = _split_cells(af, bf, cf, na == 3, nb == 3, nc == 3, a0 % nx, b0 % ny, c0 % nz, (a0 + 1) % nx,
+                                   (b0 + 1) % ny, (c0 + 1) % nz, r, scale[p], work, e + 1)
+            continue
         for mi in range(na):
             a = _node(a0, mi, dx, nx, px) - x
             for mj in range(nb):
@@ -325,7 +354,7 @@ def _volume_range(lo, hi, position, radius, scale, dx, dy, dz, nx, ny, nz, px, p
                     c = _node(c0, mk, dz, nz, pz) - z
                     v = 0.0
                     if a < r and b < r and c < r:
-                        v = _corner_given(a, b, c, r, o3, oa, ob, oc) if few else corner_volume(a, b, c, r)
+                        v = corner_volume(a, b, c, r)
                     work[base + (mi * nb + mj) * nc + mk] = v
         m = 0
         for i in range(a0, a1 + 1):
@@ -463,8 +492,7 @@ def _volume_add_parallel(position, radius, scale, velocity, dx, dy, dz, px, py, 
 @njit(cache=True)
 def volume_deposit(position, radius, scale, velocity, dx, dy, dz, px, py, pz, out, ovx, ovy, ovz, work=None):
     """Add scale[p] V_pc (and scale[p] V_pc v[p]) to every cell c that the sphere of p overlaps, V_pc the exact
-    volume of the sphere in the cell (``sphere_box_volume``, bitwise, from the node values of the module
-    docstring; periodic axes wrapped, non-periodic edge cells unbounded). position, velocity : (N, 3);
+    volume of the sphere in the cell (``sphere_box_volume`` to round-off, by the roads of the module docstring; periodic axes wrapped, non-periodic edge cells unbounded). position, velocity : (N, 3);
     radius, scale : (N,); out, ovx, ovy, ovz : (nx, ny, nz), accumulated into. work : (≥ N ``volume_stride``,)
     float64 scratch (allocated here if None or shorter)."""
     nx, ny, nz = out.shape

@@ -24,13 +24,12 @@ from .voidage import SolidsMap
 def refusals(coupling, dimensions: int = 2) -> list[str]:
     """What in the coupling of a GPU engine keeps its particle side on the host, one line each (empty: the
     device exchange runs it). ``dimensions`` of the gas grid: in 3D both voidage methods ('centroid',
-    'volume') have device kernels (``exchange3d_gpu``)."""
+    'volume') have device kernels (``exchange3d_gpu``), and the 'cell' exchange (``_cell3d_cuda``)."""
     opts, out = coupling.options, []
     if opts.gpu_exchange == "host":
         out.append("coupling.gpu_exchange = 'host'")
-    if coupling.exchange not in ("particle", "cell") or (dimensions == 3 and coupling.exchange != "particle"):
-        runs = "'particle'" if dimensions == 3 else "'particle' and 'cell'"
-        out.append(f"coupling.momentum_exchange = {coupling.exchange!r} (the device runs {runs})")
+    if coupling.exchange not in ("particle", "cell"):
+        out.append(f"coupling.momentum_exchange = {coupling.exchange!r} (the device runs 'particle' and 'cell')")
     if dimensions == 2 and coupling.mapping.method not in ("centroid", "area", "area_volume"):
         out.append(f"coupling.voidage.method = {coupling.mapping.method!r} (the device maps 'centroid', 'area' and "
                    "'area_volume' on a 2D grid)")

@@ -233,7 +233,7 @@ def test_particle_forces3d_match_cpu(split, pressure, periodic):
 
 
 def test_refusals_on_a_3d_grid():
-    """Both 3D voidage methods have device kernels; the 'particle' and 'cell' exchanges."""
+    """Both 3D voidage methods have device kernels, and every exchange ('particle', 'cell', 'cell_beta')."""
     from types import SimpleNamespace
 
     from fluidem.case import load_case
@@ -249,8 +249,7 @@ def test_refusals_on_a_3d_grid():
     assert refusals(coupling(bed), dimensions=3) == []
     assert refusals(coupling(load_case("bubbling-3d", {"coupling.voidage.method": "centroid"})), dimensions=3) == []
     assert refusals(coupling(bed, exchange="cell"), dimensions=3) == []
-    assert refusals(coupling(bed, exchange="cell_beta"), dimensions=3) == [
-        "coupling.momentum_exchange = 'cell_beta' (the device runs 'particle' and 'cell')"]
+    assert refusals(coupling(bed, exchange="cell_beta"), dimensions=3) == []
     assert refusals(coupling(load_case("bubbling-3d", {"coupling.gpu_exchange": "host"})), dimensions=3) == [
         "coupling.gpu_exchange = 'host'"]
 
@@ -327,6 +326,32 @@ def test_cell_forces3d_match_cpu(pressure, periodic):
     for cpu, dev in ((ext, d_ext), (total, d_total)):
         got = dev.copy_to_host()
         assert np.all(np.abs(got - cpu) <= PER_PARTICLE_RTOL * np.abs(cpu).max())
+
+
+@pytest.mark.parametrize("fold,mixture", [(False, False), (True, True)])
+def test_kp_now3d_matches_cpu(fold, mixture):
+    """K_p = β/(1 − ε_p) V_p (Sun 2007 eq. 29) of each particle at the current gas without face sums, the
+    "cell_beta" exchange's drag: ``_cell3d_cuda.kp_now3d`` against ``_paired3d_kernels.kp3d``, out-of-range
+    particles counted and given NaN as there."""
+    from fluidem.coupling import _cell3d_cuda as C3
+
+    pos, vel, radius, volume, gas = _system()
+    law = drag_laws.get("gidaspow")().pack()
+    inv_dbar = np.random.default_rng(4).uniform(100.0, 300.0, CELLS) if mixture else np.zeros((0, 0, 0))
+    n = pos.shape[0]
+    kp, valid = np.zeros(n), np.empty(n, np.bool_)
+    fields = (gas["u"], gas["v"], gas["w"], gas["voidage"], gas["rho"])
+    periodic = (True, False, False)
+    bad = P3.kp3d(law, pos, vel, radius, volume, *fields, MU, inv_dbar, *SIZES, 0.3, *periodic, fold, kp, valid)
+    assert 0 < bad < n // 4
+    d_kp, d_valid, d_bad = _dev(np.zeros(n), np.zeros(n, np.bool_), np.zeros(1, dtype=np.int32))
+    C3.kp_now3d[1, C3.THREADS](*_dev(law, pos, vel, radius, volume, *fields), MU, *_dev(inv_dbar), *SIZES, 0.3,
+                               *periodic, fold, d_kp, d_valid, d_bad)
+    assert int(d_bad.copy_to_host()[0]) == bad
+    assert np.array_equal(d_valid.copy_to_host(), valid)
+    got = d_kp.copy_to_host()
+    assert np.array_equal(np.isnan(got), ~valid)
+    assert np.all(np.abs(got[valid] - kp[valid]) <= PER_PARTICLE_RTOL * np.abs(kp[valid]))
 
 
 def _bed(packing_case, n=216, two_species=False):
@@ -429,16 +454,18 @@ def test_coupled3d_polydisperse_device_matches_host(packing_case):
     assert np.abs(dev.gas.checkpoint_arrays()["coupling/kp"] - kp).max() <= 1e-9 * np.abs(kp).max()
 
 
-def test_coupled3d_cell_exchange_device_matches_host(packing_case):
-    """``momentum_exchange = "cell"`` on a 3D grid with the particle side on the device (the cell β sums, the
-    pressure voidage's face sums and each particle's share of its cell's drag: ``coupling._cell3d_cuda``) against
-    the host (``gpu_exchange = "host"``): three gas steps of four sub-steps agree to round-off (the bounds of
+@pytest.mark.parametrize("exchange", ["cell", "cell_beta"])
+def test_coupled3d_cell_exchange_device_matches_host(packing_case, exchange):
+    """``momentum_exchange = "cell"`` and ``"cell_beta"`` on a 3D grid with the particle side on the device (the
+    cell β sums; for "cell" the pressure voidage's face sums and each particle's share of its cell's drag, for
+    "cell_beta" each particle's K_p evaluated at every sub-step: ``coupling._cell3d_cuda``) against the host
+    (``gpu_exchange = "host"``): three gas steps of four sub-steps agree to round-off (the bounds of
     ``test_coupled3d_run_device_matches_host``), as do the cell β, the pressure voidage and ``exchange_balance``."""
     from fluidem import Simulation
     from fluidem.case import validate_case
 
-    data, height = _bed(packing_case, n=125)
-    data["coupling"]["momentum_exchange"] = "cell"
+    data, height = _bed(packing_case, n=125 if exchange == "cell" else 64)
+    data["coupling"]["momentum_exchange"] = exchange
     runs = {}
     for mode in ("device", "host"):
         data["coupling"]["gpu_exchange"] = mode
@@ -456,7 +483,8 @@ def test_coupled3d_cell_exchange_device_matches_host(packing_case):
         assert np.abs(getattr(dev.gas.state, k) - b).max() <= 1e-9 * np.abs(b).max(), k
     for a, b in zip((dev.gas.last_beta, *dev.gas._pressure_voidage), (host.gas.last_beta, *host.gas._pressure_voidage)):
         assert np.abs(a - b).max() <= 1e-9 * np.abs(b).max()
-    assert host.gas._pressure_voidage[1].min() < 0.9  # the particles' volume on the faces
+    if exchange == "cell":  # the particles' volume on the faces of the paired pressure term
+        assert host.gas._pressure_voidage[1].min() < 0.9
     bal, ref = dev.gas.exchange_balance(), host.gas.exchange_balance()
-    for k in ("gas", "boundary", "particles", "pressure_gas", "pressure_particles"):
+    for k in ref:
         assert np.abs(bal[k] - ref[k]).max() <= 1e-9 * np.abs(ref[k]).max(), k

@@ -14,6 +14,10 @@ of its cell's drag with −V_p ∇p (``_exchange3d_kernels.cell_force3d``, Sun 2
                          finishes ε_p,f = max(1 − Σ/V_f, ε_min): ``_paired3d_kernels._voidage_of``).
 ``cell_solids3d``        Σ V_p of the particles centred in each cell, by ``_cell`` (the share's denominator).
 ``cell_forces3d``        F_p = V_p/Σ V_r β_c V_c (u_c − u_s,c) − V_p ∇p_p into ext, the total following.
+``kp_now3d``             K_p = β/(1 − ε_p) V_p (Sun 2007 eq. 29) of each particle at the current gas, without face
+                         sums (``_paired3d_kernels.kp3d``, its ``_kp_range`` compiled for the device and run on one
+                         particle per thread): the "cell_beta" exchange's own drag on the particles, with
+                         ``_paired3d_cuda.forces3d`` after it.
 
 The sums are atomic: the CPU's to round-off, added in another order.
 """
@@ -21,6 +25,7 @@ from numba import cuda
 
 from ..particles.contact._dispatch_cuda import cached_kernel
 from . import _exchange3d_kernels as X3
+from . import _paired3d_kernels as P3
 from ._cell_cuda import cell_of
 from ._paired3d_cuda import THREADS, _add3, _index, store_force  # noqa: F401 - THREADS: the launches' block size
 from .drag._dispatch_cuda import beta_per_solids, device_tree
@@ -28,6 +33,7 @@ from .drag._dispatch_cuda import beta_per_solids, device_tree
 cell_drag3d = device_tree(X3.cell_drag3d, beta_per_solids=beta_per_solids)
 pressure_deposit_one3d = device_tree(X3.pressure_deposit_one3d, _add3=_add3, U=_index)
 cell_force3d = device_tree(X3.cell_force3d, U=_index)
+kp_range = device_tree(P3._kp_range, beta_per_solids=beta_per_solids, U=_index)
 
 
 @cached_kernel
@@ -94,3 +100,19 @@ def cell_forces3d(position, volume, solids, beta, solids_u, solids_v, solids_w, 
                               beta, solids_u, solids_v, solids_w, u, v, w, p, 1.0 / dx, 1.0 / dy, 1.0 / dz,
                               cell_volume, px, py, pz, pressure_force)
     store_force(ext, total, q, fx, fy, fz, True)
+
+
+@cached_kernel
+def kp_now3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, dx, dy, dz, min_voidage, px,
+             py, pz, fold, kp, valid, bad):
+    """kp[q] = β/(1 − ε_q) V_q [kg/s] (Sun 2007 eq. 29) at the particle's interpolated voidage (clipped to
+    [min_voidage, 1]), gas density and slip, valid[q] whether its drag arguments are in range (else kp[q] = NaN,
+    counted in bad[0]): ``_paired3d_kernels.kp3d``, one particle per thread. position, velocity : (N, 3); radius,
+    volume, kp, valid : (N,); u, v, w on their faces; voidage, rho (nx, ny, nz); inv_dbar (nx, ny, nz) or
+    (0, 0, 0) as there."""
+    q = cuda.grid(1)
+    if q >= position.shape[0]:
+        return
+    if kp_range(q, q + 1, law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, 1.0 / dx,
+                1.0 / dy, 1.0 / dz, min_voidage, px, py, pz, fold, kp, valid) > 0:
+        cuda.atomic.add(bad, 0, 1)

@@ -55,8 +55,9 @@ class DeviceExchange3D(DeviceExchange):
 
     def __init__(self, coupling):
         super().__init__(coupling)
-        if self._cellx:  # the "cell" exchange's u_s of the third axis
+        if self._cellx:  # the "cell" exchanges' u_s of the third axis
             self._cellx["sw"] = self._cuda.device_array(coupling.grid.shape)
+        self._valid = self._cuda.device_array(max(self.n, 1), dtype=np.bool_)  # scratch of ``kp_now3d``
 
     @staticmethod
     def _kernel_modules():
@@ -243,6 +244,37 @@ class DeviceExchange3D(DeviceExchange):
         self.engine.device_changed(("ext_force", "force"))
 
 
+    def set_kp_forces(self, pressure: bool) -> int:
+        """The "cell_beta" exchange's gas force on each particle, K_p evaluated now (``GasCoupling3D._gas_forces``):
+        K_p at the current gas and particles (``_cell3d_cuda.kp_now3d``, as ``_paired3d_kernels.kp3d``), then
+        K_p (u_p − v_p) − V_p ∇p_p into ``ext_force``, the total force following (``_paired3d_cuda.forces3d``,
+        boundary faces not folded). Returns the number of particles whose drag arguments are out of range (their
+        forces then left as they were, as the host raises before its forces)."""
+        from . import _cell3d_cuda as C3
+
+        if self.n == 0:
+            return 0
+        cp, gd, gs = self.coupling, self.coupling.grid, self.coupling.state
+        d = self.engine.device_arrays()
+        self._send(u=gs.u, v=gs.v, w=gs.w, voidage=gs.voidage, rho=gs.rho, p=gs.p)
+        self._zero_bad()
+        g, threads = self._gas, C3.THREADS
+        blocks = self._blocks(threads)
+        C3.kp_now3d[blocks, threads](
+            self.law, d["position"], d["velocity"], d["radius"], self._volume(), g["u"], g["v"], g["w"], g["voidage"],
+            g["rho"], float(cp.solver.props.viscosity), self._send_inv_dbar(), float(gd.dx), float(gd.dy),
+            float(gd.dz), float(cp.mapping.minimum_voidage), *cp._periodic, bool(cp._fold), self.kp, self._valid,
+            self.bad)
+        bad = int(self.bad.copy_to_host()[0])
+        if bad:
+            return bad
+        self._pc.forces3d[blocks, threads](d["position"], d["velocity"], self._volume(), self.kp, g["u"], g["v"],
+                                           g["w"], g["p"], float(gd.dx), float(gd.dy), float(gd.dz), *cp._periodic,
+                                           bool(cp._fold), bool(pressure), d["ext_force"], d["force"])
+        self.engine.device_changed(("ext_force", "force"))
+        return 0
+
+
 class DeviceGasCoupling3D(GasCoupling3D):
     """``GasCoupling3D`` whose particle side runs on the GPU engine's device arrays (module docstring); with a
     refused option (``exchange_gpu.refusals``) it is ``GasCoupling3D`` itself, the particles fetched once a gas
@@ -313,6 +345,11 @@ class DeviceGasCoupling3D(GasCoupling3D):
             self._check_gas()
             if self.exchange == "cell":
                 self._device.set_cell_forces(bool(self.options.pressure_gradient_force))
+            elif self.exchange == "cell_beta":
+                bad = self._device.set_kp_forces(bool(self.options.pressure_gradient_force))
+                if bad:
+                    raise ValueError(f"particle drag: arguments out of range for {bad} particles "
+                                     "(voidage must lie in (0, 1], gas density > 0)")
             else:
                 self._device.set_forces(self._split, bool(self.options.pressure_gradient_force))
             return

@@ -7,7 +7,8 @@ where every option of the coupling has a device kernel (``exchange_gpu.refusals`
 by centre or by the exact sphere-in-cell volume (``_voidage3d_cuda``), each particle's drag coefficient and
 the face sums of the ``particle`` exchange on the x-, y- and z-faces (``_paired3d_cuda.deposit3d``), and the
 gas force on each particle (``_paired3d_cuda.forces3d``, ``forces_split3d``); for the ``cell`` exchange the
-cell β sums, the pressure voidage's face sums and each particle's share of its cell's drag (``_cell3d_cuda``).
+cell β sums, the pressure voidage's face sums and each particle's share of its cell's drag, for ``cell_beta``
+the cell β sums and each particle's K_p evaluated at every force (``_cell3d_cuda``).
 Per gas step only cell and face arrays cross between host and device: the gas fields go to the device, the
 deposited sums come back, and the host finishes them (the fraction over V_cell, ``_voidage3d_kernels.
 diffuse3d``, clipping and averages as ``_voidage3d_kernels.map_solids3d``; ``_paired3d_kernels._coefficients``,
@@ -176,8 +177,7 @@ class DeviceExchange3D(DeviceExchange):
             self._pc.forces3d[self._blocks(threads), threads](*args, d["ext_force"], d["force"])
             self.engine.device_changed(("ext_force", "force"))
 
-
-    # ------------------------------------------------------------ the "cell" exchange
+    # ------------------------------------------------------------ the "cell" and "cell_beta" exchanges
     def cell_beta(self, voidage, solids_u, solids_v, solids_w, out) -> int:
         """out ← β per cell [kg m^-3 s^-1] of the "cell" exchange (``_exchange3d_kernels.cell_beta3d``, Sun 2007
         eq. 33): Σ β/(1 − ε) V_p of each cell on the device (``_cell3d_cuda.cell_beta_deposit3d``), / V_cell on
@@ -242,7 +242,6 @@ class DeviceExchange3D(DeviceExchange):
                                           float(gd.dz), float(gd.cell_volume), *cp._periodic, bool(pressure),
                                           d["ext_force"], d["force"])
         self.engine.device_changed(("ext_force", "force"))
-
 
     def set_kp_forces(self, pressure: bool) -> int:
         """The "cell_beta" exchange's gas force on each particle, K_p evaluated now (``GasCoupling3D._gas_forces``):

@@ -23,6 +23,7 @@ import math
 import numpy as np
 import pytest
 
+from fluidem.coupling import _exchange3d_kernels as X3
 from fluidem.coupling import _paired3d_kernels as P3
 from fluidem.coupling import _voidage3d_kernels as VK3
 from fluidem.coupling.drag import drag_laws
@@ -232,7 +233,7 @@ def test_particle_forces3d_match_cpu(split, pressure, periodic):
 
 
 def test_refusals_on_a_3d_grid():
-    """Both 3D voidage methods have device kernels; the 'particle' exchange only, one particle size."""
+    """Both 3D voidage methods have device kernels, and every exchange ('particle', 'cell', 'cell_beta')."""
     from types import SimpleNamespace
 
     from fluidem.case import load_case
@@ -247,10 +248,110 @@ def test_refusals_on_a_3d_grid():
     assert bed.coupling.voidage.method == "volume"
     assert refusals(coupling(bed), dimensions=3) == []
     assert refusals(coupling(load_case("bubbling-3d", {"coupling.voidage.method": "centroid"})), dimensions=3) == []
-    assert refusals(coupling(bed, exchange="cell"), dimensions=3) == [
-        "coupling.momentum_exchange = 'cell' (the device runs 'particle')"]
+    assert refusals(coupling(bed, exchange="cell"), dimensions=3) == []
+    assert refusals(coupling(bed, exchange="cell_beta"), dimensions=3) == []
     assert refusals(coupling(load_case("bubbling-3d", {"coupling.gpu_exchange": "host"})), dimensions=3) == [
         "coupling.gpu_exchange = 'host'"]
+
+
+@pytest.mark.parametrize("mixture", [False, True])
+def test_cell_beta_deposit3d_matches_cpu(mixture):
+    """Σ β/(1 − ε) V_p of the particles centred in each cell over V_cell, β/(1 − ε) at the cell's ε, gas density
+    and slip |u_c − v_s,c| (Sun 2007 eq. 33; with ``mixture`` y = d/D̄ of the cell): ``_cell3d_cuda.
+    cell_beta_deposit3d`` against ``_exchange3d_kernels.cell_beta3d``, out-of-range particles counted and left out
+    as there."""
+    from fluidem.coupling import _cell3d_cuda as C3
+
+    pos, _, radius, volume, gas = _system()
+    rng = np.random.default_rng(8)
+    solids = [rng.normal(0.0, 0.3, CELLS) for _ in range(3)]
+    inv_dbar = rng.uniform(200.0, 700.0, CELLS) if mixture else np.zeros((0, 0, 0))
+    law = drag_laws.get("beetstra")().pack()
+    beta = np.empty(CELLS)
+    vc = DX * DY * DZ
+    bad = X3.cell_beta3d(law, pos, radius, volume, gas["u"], gas["v"], gas["w"], gas["rho"], gas["voidage"], *solids,
+                         MU, inv_dbar, *SIZES, vc, beta)
+    assert 0 < bad < pos.shape[0] // 4 and np.count_nonzero(beta) > 10
+    d_out, d_bad = _dev(np.zeros(CELLS), np.zeros(1, dtype=np.int32))
+    args = _dev(law, pos, radius, volume, gas["u"], gas["v"], gas["w"], gas["rho"], gas["voidage"], *solids)
+    C3.cell_beta_deposit3d[1, C3.THREADS](*args, MU, *_dev(inv_dbar), *SIZES, d_out, d_bad)
+    assert int(d_bad.copy_to_host()[0]) == bad
+    _sum_close(beta, d_out.copy_to_host() / vc)
+
+
+@pytest.mark.parametrize("periodic", [(False, False, False), (True, False, True)])
+def test_pressure_deposit3d_matches_cpu(periodic):
+    """The particle volume on the x-, y- and z-faces of each particle's folded ∇p interpolation, finished into the
+    pressure voidage max(1 − Σ w V_p / V_f, ε_min): ``_cell3d_cuda.pressure_deposit3d`` against
+    ``_exchange3d_kernels.pressure_voidage3d``, across periodic sides."""
+    from fluidem.coupling import _cell3d_cuda as C3
+
+    pos, _, _, volume, _ = _system(seed=6)
+    volume = volume * 5.0  # faces filled past the clipping, some
+    vf = face_volumes3d(CELLS, periodic, DX * DY * DZ)
+    eps = [np.empty(f.shape) for f in vf]
+    X3.pressure_voidage3d(pos, volume, *SIZES, *periodic, *vf, 0.3, *eps)
+    assert min(e.min() for e in eps) == 0.3 and any(np.any((e > 0.3) & (e < 1.0)) for e in eps)
+    dev = _dev(*(np.zeros(f.shape) for f in vf))
+    C3.pressure_deposit3d[1, C3.THREADS](*_dev(pos, volume), *SIZES, *periodic, *dev)
+    for cpu, d, f in zip(eps, dev, vf):
+        got = d.copy_to_host()
+        P3._voidage_of(got, f, 0.3)
+        _sum_close(cpu, got)
+
+
+@pytest.mark.parametrize("pressure,periodic", [(True, (False, False, True)), (False, (True, True, False))])
+def test_cell_forces3d_match_cpu(pressure, periodic):
+    """Each particle's share V_p/Σ V_r of its cell's drag β V_c (u_c − u_s,c), minus V_p ∇p, the engine's total
+    following: ``_cell3d_cuda.cell_solids3d`` and ``cell_forces3d`` against ``_exchange3d_kernels.cell_forces3d``;
+    Σ V_p per cell against the cells of the centres counted by NumPy (trunc(x/d) clamped)."""
+    from fluidem.coupling import _cell3d_cuda as C3
+
+    pos, vel, _, volume, gas = _system(seed=5)
+    rng = np.random.default_rng(9)
+    beta, *solids = rng.uniform(0.0, 3e4, CELLS), *(rng.normal(0.0, 0.3, CELLS) for _ in range(3))
+    n = pos.shape[0]
+    ext, total = rng.normal(size=(n, 3)), rng.normal(size=(n, 3))
+    d_ext, d_total = _dev(ext, total)
+    vc = DX * DY * DZ
+    fields = (gas["u"], gas["v"], gas["w"], gas["p"])
+    X3.cell_forces3d(pos, vel, volume, beta, *solids, *fields, *SIZES, vc, *periodic, pressure, ext, total)
+    d_pos, d_vol, d_solids = _dev(pos, volume, np.zeros(CELLS))
+    C3.cell_solids3d[1, C3.THREADS](d_pos, d_vol, *SIZES, d_solids)
+    cell = [np.clip(np.trunc(pos[:, a] / SIZES[a]), 0, CELLS[a] - 1).astype(int) for a in range(3)]
+    expected = np.bincount(np.ravel_multi_index(cell, CELLS), volume, minlength=NX * NY * NZ).reshape(CELLS)
+    _sum_close(expected, d_solids.copy_to_host())
+    C3.cell_forces3d[1, C3.THREADS](d_pos, d_vol, d_solids, *_dev(beta, *solids, *fields), *SIZES, vc, *periodic,
+                                    pressure, d_ext, d_total)
+    for cpu, dev in ((ext, d_ext), (total, d_total)):
+        got = dev.copy_to_host()
+        assert np.all(np.abs(got - cpu) <= PER_PARTICLE_RTOL * np.abs(cpu).max())
+
+
+@pytest.mark.parametrize("fold,mixture", [(False, False), (True, True)])
+def test_kp_now3d_matches_cpu(fold, mixture):
+    """K_p = β/(1 − ε_p) V_p (Sun 2007 eq. 29) of each particle at the current gas without face sums, the
+    "cell_beta" exchange's drag: ``_cell3d_cuda.kp_now3d`` against ``_paired3d_kernels.kp3d``, out-of-range
+    particles counted and given NaN as there."""
+    from fluidem.coupling import _cell3d_cuda as C3
+
+    pos, vel, radius, volume, gas = _system()
+    law = drag_laws.get("gidaspow")().pack()
+    inv_dbar = np.random.default_rng(4).uniform(100.0, 300.0, CELLS) if mixture else np.zeros((0, 0, 0))
+    n = pos.shape[0]
+    kp, valid = np.zeros(n), np.empty(n, np.bool_)
+    fields = (gas["u"], gas["v"], gas["w"], gas["voidage"], gas["rho"])
+    periodic = (True, False, False)
+    bad = P3.kp3d(law, pos, vel, radius, volume, *fields, MU, inv_dbar, *SIZES, 0.3, *periodic, fold, kp, valid)
+    assert 0 < bad < n // 4
+    d_kp, d_valid, d_bad = _dev(np.zeros(n), np.zeros(n, np.bool_), np.zeros(1, dtype=np.int32))
+    C3.kp_now3d[1, C3.THREADS](*_dev(law, pos, vel, radius, volume, *fields), MU, *_dev(inv_dbar), *SIZES, 0.3,
+                               *periodic, fold, d_kp, d_valid, d_bad)
+    assert int(d_bad.copy_to_host()[0]) == bad
+    assert np.array_equal(d_valid.copy_to_host(), valid)
+    got = d_kp.copy_to_host()
+    assert np.array_equal(np.isnan(got), ~valid)
+    assert np.all(np.abs(got[valid] - kp[valid]) <= PER_PARTICLE_RTOL * np.abs(kp[valid]))
 
 
 def _bed(packing_case, n=216, two_species=False):
@@ -351,3 +452,39 @@ def test_coupled3d_polydisperse_device_matches_host(packing_case):
         assert np.abs(getattr(dev.gas.state, k) - b).max() <= 1e-9 * np.abs(b).max(), k
     kp = host.gas.checkpoint_arrays()["coupling/kp"]
     assert np.abs(dev.gas.checkpoint_arrays()["coupling/kp"] - kp).max() <= 1e-9 * np.abs(kp).max()
+
+
+@pytest.mark.parametrize("exchange", ["cell", "cell_beta"])
+def test_coupled3d_cell_exchange_device_matches_host(packing_case, exchange):
+    """``momentum_exchange = "cell"`` and ``"cell_beta"`` on a 3D grid with the particle side on the device (the
+    cell β sums; for "cell" the pressure voidage's face sums and each particle's share of its cell's drag, for
+    "cell_beta" each particle's K_p evaluated at every sub-step: ``coupling._cell3d_cuda``) against the host
+    (``gpu_exchange = "host"``): three gas steps of four sub-steps agree to round-off (the bounds of
+    ``test_coupled3d_run_device_matches_host``), as do the cell β, the pressure voidage and ``exchange_balance``."""
+    from fluidem import Simulation
+    from fluidem.case import validate_case
+
+    data, height = _bed(packing_case, n=125 if exchange == "cell" else 64)
+    data["coupling"]["momentum_exchange"] = exchange
+    runs = {}
+    for mode in ("device", "host"):
+        data["coupling"]["gpu_exchange"] = mode
+        sim = Simulation(validate_case({**data, "device": "gpu"}))
+        sim.advance(3 * sim.gas.substeps)
+        runs[mode] = sim
+    dev, host = runs["device"], runs["host"]
+    assert dev.gas._device is not None and host.gas._device is None and dev.gas.gas_steps == 3
+    assert np.abs(dev.state.position - host.state.position).max() <= 1e-9 * height
+    for a, b in ((dev.state.velocity, host.state.velocity), (dev.engine.ext_force, host.engine.ext_force)):
+        assert np.abs(a - b).max() <= 1e-9 * np.abs(b).max()
+    assert np.abs(host.engine.ext_force[:, 1]).max() > 0.1 * host.state.mass.max() * 9.81  # the gas carries weight
+    for k in ("p", "u", "v", "w", "voidage"):
+        b = getattr(host.gas.state, k)
+        assert np.abs(getattr(dev.gas.state, k) - b).max() <= 1e-9 * np.abs(b).max(), k
+    for a, b in zip((dev.gas.last_beta, *dev.gas._pressure_voidage), (host.gas.last_beta, *host.gas._pressure_voidage)):
+        assert np.abs(a - b).max() <= 1e-9 * np.abs(b).max()
+    if exchange == "cell":  # the particles' volume on the faces of the paired pressure term
+        assert host.gas._pressure_voidage[1].min() < 0.9
+    bal, ref = dev.gas.exchange_balance(), host.gas.exchange_balance()
+    for k in ref:
+        assert np.abs(bal[k] - ref[k]).max() <= 1e-9 * np.abs(ref[k]).max(), k

@@ -12,6 +12,9 @@
 ``pressure_voidage3d``  the gas's pressure-term voidage ε_p,f = 1 − Σ_p w_pf V_p / V_f on the faces of every axis,
                         w_pf the weights of the particles' ∇p: the pressure force paired as ``deposit3d`` pairs it.
 
+Their per-particle arithmetic is in ``inline="always"`` helpers (``cell_drag3d``, ``cell_force3d``,
+``pressure_deposit_one3d``) that ``_cell3d_cuda`` compiles for the device.
+
 Σ_faces V_c (β_f u_f − (β u_s)_f) = Σ_c D_c exactly (each face carries half of each of its two cells), so with
 ``cell_forces3d`` the gas loses exactly the drag the particles gain. Each particle counts in the cell of its
 centre, trunc(x / d) clamped to the grid (``_exchange_kernels._cell``), as in 2D. The drag law is its packed row
@@ -26,6 +29,23 @@ from ._exchange_kernels import _cell, _drag_arguments_valid, store_force
 from ._paired3d_kernels import _add3, _gas_at3, _voidage_of
 from ._paired_kernels import _centre_axis, _face_axis
 from .drag._dispatch import beta_per_solids
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def cell_drag3d(law, u, v, w, rho, voidage, solids_u, solids_v, solids_w, mu, inv_dbar, mixture, i, j, k, d):
+    """(in range, β/(1 − ε) [kg m^-3 s^-1]) of a particle of diameter d in cell (i, j, k) for ``cell_beta3d``
+    (Sun 2007 eq. 33): the cell's voidage ε and gas density, the slip |(u_c, v_c, w_c) − (v_s,x, v_s,y, v_s,z)|
+    with u_c, v_c, w_c the means of the cell's two faces of each axis, y = d/D̄ of the cell with ``mixture``
+    (else 1); (False, 0) where the drag arguments are out of range (the 2D ``_exchange_kernels.cell_drag``)."""
+    sx = 0.5 * (u[i, j, k] + u[i + 1, j, k]) - solids_u[i, j, k]
+    sy = 0.5 * (v[i, j, k] + v[i, j + 1, k]) - solids_v[i, j, k]
+    sz = 0.5 * (w[i, j, k] + w[i, j, k + 1]) - solids_w[i, j, k]
+    slip = math.sqrt(sx * sx + sy * sy + sz * sz)
+    eps = voidage[i, j, k]
+    rg = rho[i, j, k]
+    if not _drag_arguments_valid(eps, slip, d, rg, mu):
+        return False, 0.0
+    return True, beta_per_solids(law, eps, slip, d, rg, mu, d * inv_dbar[i, j, k] if mixture else 1.0)
 
 
 @njit(cache=True, error_model="numpy")
@@ -53,16 +73,11 @@ def cell_beta3d(law, position, radius, volume, u, v, w, rho, voidage, solids_u, 
         if d == done_d[i, j, k]:  # same cell, same diameter: same β/(1 − ε)
             b = done_b[i, j, k]
         else:
-            sx = 0.5 * (u[i, j, k] + u[i + 1, j, k]) - solids_u[i, j, k]
-            sy = 0.5 * (v[i, j, k] + v[i, j + 1, k]) - solids_v[i, j, k]
-            sz = 0.5 * (w[i, j, k] + w[i, j, k + 1]) - solids_w[i, j, k]
-            slip = math.sqrt(sx * sx + sy * sy + sz * sz)
-            eps = voidage[i, j, k]
-            rg = rho[i, j, k]
-            if not _drag_arguments_valid(eps, slip, d, rg, mu):
+            ok, b = cell_drag3d(law, u, v, w, rho, voidage, solids_u, solids_v, solids_w, mu, inv_dbar, mixture, i, j,
+                                k, d)
+            if not ok:
                 bad += 1
                 continue
-            b = beta_per_solids(law, eps, slip, d, rg, mu, d * inv_dbar[i, j, k] if mixture else 1.0)
             done_d[i, j, k] = d
             done_b[i, j, k] = b
         out[i, j, k] += b * volume[p]  # eq. 33
@@ -113,6 +128,25 @@ def cell_faces3d(beta, solids_u, solids_v, solids_w, px, py, pz, bu, su, bv, sv,
     _faces_of_axis3(beta, solids_w, 2, pz, bw, sw)
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def cell_force3d(x, y, z, vq, i, j, k, solids, beta, solids_u, solids_v, solids_w, u, v, w, p, idx, idy, idz,
+                 cell_volume, px, py, pz, pressure_force):
+    """(F_x, F_y, F_z) [N] of ``cell_forces3d`` for a particle of volume vq centred at (x, y, z) in cell (i, j, k),
+    ``solids`` Σ V_r of the cells' particles: its share V_q/Σ V_r of its cell's drag β V_c (u_c − u_s,c), minus
+    V_q ∇p_q (Sun 2007 eq. 28) if ``pressure_force`` (the 2D ``_paired_kernels.cell_force``)."""
+    nx, ny, nz = beta.shape
+    share = vq / solids[i, j, k] * beta[i, j, k] * cell_volume
+    fx = share * (0.5 * (u[i, j, k] + u[i + 1, j, k]) - solids_u[i, j, k])
+    fy = share * (0.5 * (v[i, j, k] + v[i, j + 1, k]) - solids_v[i, j, k])
+    fz = share * (0.5 * (w[i, j, k] + w[i, j, k + 1]) - solids_w[i, j, k])
+    if pressure_force:  # −V_p ∇p, Sun 2007 eq. 28
+        _, _, _, gx, gy, gz = _gas_at3(x, y, z, u, v, w, p, idx, idy, idz, nx, ny, nz, px, py, pz, True, True)
+        fx -= vq * gx
+        fy -= vq * gy
+        fz -= vq * gz
+    return fx, fy, fz
+
+
 @njit(cache=True, error_model="numpy")
 def cell_forces3d(position, velocity, volume, beta, solids_u, solids_v, solids_w, u, v, w, p, dx, dy, dz, cell_volume,
                   px, py, pz, pressure_force, out, total):
@@ -136,20 +170,26 @@ def cell_forces3d(position, velocity, volume, beta, solids_u, solids_v, solids_w
     idx, idy, idz = 1.0 / dx, 1.0 / dy, 1.0 / dz
     follow = total.shape[0] > 0
     for q in range(n):
-        i = cell[q, 0]
-        j = cell[q, 1]
-        k = cell[q, 2]
-        share = volume[q] / solids[i, j, k] * beta[i, j, k] * cell_volume
-        fx = share * (0.5 * (u[i, j, k] + u[i + 1, j, k]) - solids_u[i, j, k])
-        fy = share * (0.5 * (v[i, j, k] + v[i, j + 1, k]) - solids_v[i, j, k])
-        fz = share * (0.5 * (w[i, j, k] + w[i, j, k + 1]) - solids_w[i, j, k])
-        if pressure_force:  # −V_p ∇p, Sun 2007 eq. 28
-            _, _, _, gx, gy, gz = _gas_at3(position[q, 0], position[q, 1], position[q, 2], u, v, w, p, idx, idy, idz,
-                                           nx, ny, nz, px, py, pz, True, True)
-            fx -= volume[q] * gx
-            fy -= volume[q] * gy
-            fz -= volume[q] * gz
+        fx, fy, fz = cell_force3d(position[q, 0], position[q, 1], position[q, 2], volume[q], cell[q, 0], cell[q, 1],
+                                  cell[q, 2], solids, beta, solids_u, solids_v, solids_w, u, v, w, p, idx, idy, idz,
+                                  cell_volume, px, py, pz, pressure_force)
         store_force(out, total, q, fx, fy, fz, follow)
+
+
+@njit(cache=True, inline="always")
+def pressure_deposit_one3d(x, y, z, vq, idx, idy, idz, nx, ny, nz, px, py, pz, EU, EV, EW):
+    """EU, EV, EW += w_pf vq on the faces of the ∇p interpolation of a particle of volume vq at (x, y, z): the
+    trilinear weights of ``_paired3d_kernels`` (centre nodes across, face nodes along each axis, boundary faces
+    folded); ``pressure_voidage3d``'s sum, one particle."""
+    ci0, ci1, cwx0, cwx1 = _centre_axis(x, idx, nx, px)
+    cj0, cj1, cwy0, cwy1 = _centre_axis(y, idy, ny, py)
+    ck0, ck1, cwz0, cwz1 = _centre_axis(z, idz, nz, pz)
+    gi0, gi1, gwx0, gwx1 = _face_axis(x, idx, nx, px, True)
+    gj0, gj1, gwy0, gwy1 = _face_axis(y, idy, ny, py, True)
+    gk0, gk1, gwz0, gwz1 = _face_axis(z, idz, nz, pz, True)
+    _add3(EU, gi0, gi1, gwx0, gwx1, cj0, cj1, cwy0, cwy1, ck0, ck1, cwz0, cwz1, vq)
+    _add3(EV, ci0, ci1, cwx0, cwx1, gj0, gj1, gwy0, gwy1, ck0, ck1, cwz0, cwz1, vq)
+    _add3(EW, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, gk0, gk1, gwz0, gwz1, vq)
 
 
 @njit(cache=True, error_model="numpy")
@@ -166,17 +206,8 @@ def pressure_voidage3d(position, volume, dx, dy, dz, px, py, pz, VU, VV, VW, min
     EV[:, :, :] = 0.0
     EW[:, :, :] = 0.0
     for q in range(position.shape[0]):
-        x, y, z = position[q, 0], position[q, 1], position[q, 2]
-        ci0, ci1, cwx0, cwx1 = _centre_axis(x, idx, nx, px)
-        cj0, cj1, cwy0, cwy1 = _centre_axis(y, idy, ny, py)
-        ck0, ck1, cwz0, cwz1 = _centre_axis(z, idz, nz, pz)
-        gi0, gi1, gwx0, gwx1 = _face_axis(x, idx, nx, px, True)
-        gj0, gj1, gwy0, gwy1 = _face_axis(y, idy, ny, py, True)
-        gk0, gk1, gwz0, gwz1 = _face_axis(z, idz, nz, pz, True)
-        vq = volume[q]
-        _add3(EU, gi0, gi1, gwx0, gwx1, cj0, cj1, cwy0, cwy1, ck0, ck1, cwz0, cwz1, vq)
-        _add3(EV, ci0, ci1, cwx0, cwx1, gj0, gj1, gwy0, gwy1, ck0, ck1, cwz0, cwz1, vq)
-        _add3(EW, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, gk0, gk1, gwz0, gwz1, vq)
+        pressure_deposit_one3d(position[q, 0], position[q, 1], position[q, 2], volume[q], idx, idy, idz, nx, ny, nz,
+                               px, py, pz, EU, EV, EW)
     _voidage_of(EU, VU, min_voidage)
     _voidage_of(EV, VV, min_voidage)
     _voidage_of(EW, VW, min_voidage)

@@ -6,11 +6,14 @@ that keeps its particles on the device (``SoftSphereGPUEngine``), ``exchange3d.G
 where every option of the coupling has a device kernel (``exchange_gpu.refusals``): the voidage map's deposit,
 by centre or by the exact sphere-in-cell volume (``_voidage3d_cuda``), each particle's drag coefficient and
 the face sums of the ``particle`` exchange on the x-, y- and z-faces (``_paired3d_cuda.deposit3d``), and the
-gas force on each particle (``_paired3d_cuda.forces3d``, ``forces_split3d``). Per gas step only cell and face
-arrays cross between host and device: the gas fields go to the device, the deposited sums come back, and the
-host finishes them (the fraction over V_cell, ``_voidage3d_kernels.diffuse3d``, clipping and averages as
-``_voidage3d_kernels.map_solids3d``; ``_paired3d_kernels._coefficients``, ``_voidage_of``). The gas solve
-stays on the host. K_p stays on the device; it comes to the host for checkpoints and ``exchange_balance``.
+gas force on each particle (``_paired3d_cuda.forces3d``, ``forces_split3d``); for the ``cell`` exchange the
+cell β sums, the pressure voidage's face sums and each particle's share of its cell's drag, for ``cell_beta``
+the cell β sums and each particle's K_p evaluated at every force (``_cell3d_cuda``).
+Per gas step only cell and face arrays cross between host and device: the gas fields go to the device, the
+deposited sums come back, and the host finishes them (the fraction over V_cell, ``_voidage3d_kernels.
+diffuse3d``, clipping and averages as ``_voidage3d_kernels.map_solids3d``; ``_paired3d_kernels._coefficients``,
+``_voidage_of``; the cell β over V_cell and ``_exchange3d_kernels.cell_faces3d``). The gas solve stays on the
+host. K_p stays on the device; it comes to the host for checkpoints and ``exchange_balance``.
 The first map, at set-up, and the forces before the first gas step are the host's (the particles fetched
 once).
 """
@@ -20,6 +23,7 @@ import logging
 
 import numpy as np
 
+from . import _exchange3d_kernels as X3
 from . import _paired3d_kernels as P3
 from . import _voidage3d_kernels as VK3
 from . import voidage as V
@@ -49,6 +53,12 @@ def device_exchange3d(coupling):
 
 class DeviceExchange3D(DeviceExchange):
     """Device arrays and launches of the 3D coupling's particle side (module docstring)."""
+
+    def __init__(self, coupling):
+        super().__init__(coupling)
+        if self._cellx:  # the "cell" exchanges' u_s of the third axis
+            self._cellx["sw"] = self._cuda.device_array(coupling.grid.shape)
+        self._valid = self._cuda.device_array(max(self.n, 1), dtype=np.bool_)  # scratch of ``kp_now3d``
 
     @staticmethod
     def _kernel_modules():
@@ -167,6 +177,102 @@ class DeviceExchange3D(DeviceExchange):
             self._pc.forces3d[self._blocks(threads), threads](*args, d["ext_force"], d["force"])
             self.engine.device_changed(("ext_force", "force"))
 
+    # ------------------------------------------------------------ the "cell" and "cell_beta" exchanges
+    def cell_beta(self, voidage, solids_u, solids_v, solids_w, out) -> int:
+        """out ← β per cell [kg m^-3 s^-1] of the "cell" exchange (``_exchange3d_kernels.cell_beta3d``, Sun 2007
+        eq. 33): Σ β/(1 − ε) V_p of each cell on the device (``_cell3d_cuda.cell_beta_deposit3d``), / V_cell on
+        the host; returns the number of particles whose drag arguments are out of range."""
+        from . import _cell3d_cuda as C3
+
+        cp, gd, gs, c = self.coupling, self.coupling.grid, self.coupling.state, self._cellx
+        self._zero(c["sum"])
+        self._zero_bad()
+        if self.n:
+            d = self.engine.device_arrays()
+            self._send(voidage=voidage, rho=gs.rho, u=gs.u, v=gs.v, w=gs.w)
+            for k, a in zip(("su", "sv", "sw"), (solids_u, solids_v, solids_w)):
+                c[k].copy_to_device(np.ascontiguousarray(a, dtype=float))
+            g = self._gas
+            C3.cell_beta_deposit3d[self._blocks(C3.THREADS), C3.THREADS](
+                self.gas_law, d["position"], d["radius"], self._volume(), g["u"], g["v"], g["w"], g["rho"],
+                g["voidage"], c["su"], c["sv"], c["sw"], float(cp.solver.props.viscosity), self._send_inv_dbar(),
+                float(gd.dx), float(gd.dy), float(gd.dz), c["sum"], self.bad)
+        c["sum"].copy_to_host(out)
+        out /= gd.cell_volume
+        return int(self.bad.copy_to_host()[0])
+
+    def pressure_voidage(self, eu, ev, ew) -> None:
+        """eu, ev, ew ← the pressure voidage of the "cell" exchange (``_exchange3d_kernels.pressure_voidage3d``):
+        the face sums Σ w_pf V_p on the device (``_cell3d_cuda.pressure_deposit3d``), max(1 − Σ/V_f, ε_min) on the
+        host (``_paired3d_kernels._voidage_of``)."""
+        from . import _cell3d_cuda as C3
+
+        cp, gd, s = self.coupling, self.coupling.grid, self._sums
+        for k in ("EU", "EV", "EW"):
+            self._zero(s[k])
+        if self.n:
+            d = self.engine.device_arrays()
+            C3.pressure_deposit3d[self._blocks(C3.THREADS), C3.THREADS](
+                d["position"], self._volume(), float(gd.dx), float(gd.dy), float(gd.dz), *cp._periodic, s["EU"],
+                s["EV"], s["EW"])
+        for k, e, vf in zip(("EU", "EV", "EW"), (eu, ev, ew), cp._face_volumes):
+            s[k].copy_to_host(e)
+            P3._voidage_of(e, vf, cp.mapping.minimum_voidage)
+
+    def set_cell_forces(self, pressure: bool) -> None:
+        """The "cell" exchange's gas force on each particle into the engine's ``ext_force``, its total force
+        following (``_exchange3d_kernels.cell_forces3d``): Σ V_p per cell (``_cell3d_cuda.cell_solids3d``), then
+        each particle's share of its cell's drag (``_cell3d_cuda.cell_forces3d``); the cell β and u_s of the gas
+        step cross once a call."""
+        from . import _cell3d_cuda as C3
+
+        if self.n == 0:
+            return
+        cp, gd, gs, c = self.coupling, self.coupling.grid, self.coupling.state, self._cellx
+        d = self.engine.device_arrays()
+        for k, a in zip(("beta", "su", "sv", "sw"), cp._cell_inputs):
+            c[k].copy_to_device(np.ascontiguousarray(a, dtype=float))
+        self._send(u=gs.u, v=gs.v, w=gs.w, p=gs.p)
+        self._zero(c["solids"])
+        blocks, threads, g = self._blocks(C3.THREADS), C3.THREADS, self._gas
+        C3.cell_solids3d[blocks, threads](d["position"], self._volume(), float(gd.dx), float(gd.dy), float(gd.dz),
+                                          c["solids"])
+        C3.cell_forces3d[blocks, threads](d["position"], self._volume(), c["solids"], c["beta"], c["su"], c["sv"],
+                                          c["sw"], g["u"], g["v"], g["w"], g["p"], float(gd.dx), float(gd.dy),
+                                          float(gd.dz), float(gd.cell_volume), *cp._periodic, bool(pressure),
+                                          d["ext_force"], d["force"])
+        self.engine.device_changed(("ext_force", "force"))
+
+    def set_kp_forces(self, pressure: bool) -> int:
+        """The "cell_beta" exchange's gas force on each particle, K_p evaluated now (``GasCoupling3D._gas_forces``):
+        K_p at the current gas and particles (``_cell3d_cuda.kp_now3d``, as ``_paired3d_kernels.kp3d``), then
+        K_p (u_p − v_p) − V_p ∇p_p into ``ext_force``, the total force following (``_paired3d_cuda.forces3d``,
+        boundary faces not folded). Returns the number of particles whose drag arguments are out of range (their
+        forces then left as they were, as the host raises before its forces)."""
+        from . import _cell3d_cuda as C3
+
+        if self.n == 0:
+            return 0
+        cp, gd, gs = self.coupling, self.coupling.grid, self.coupling.state
+        d = self.engine.device_arrays()
+        self._send(u=gs.u, v=gs.v, w=gs.w, voidage=gs.voidage, rho=gs.rho, p=gs.p)
+        self._zero_bad()
+        g, threads = self._gas, C3.THREADS
+        blocks = self._blocks(threads)
+        C3.kp_now3d[blocks, threads](
+            self.law, d["position"], d["velocity"], d["radius"], self._volume(), g["u"], g["v"], g["w"], g["voidage"],
+            g["rho"], float(cp.solver.props.viscosity), self._send_inv_dbar(), float(gd.dx), float(gd.dy),
+            float(gd.dz), float(cp.mapping.minimum_voidage), *cp._periodic, bool(cp._fold), self.kp, self._valid,
+            self.bad)
+        bad = int(self.bad.copy_to_host()[0])
+        if bad:
+            return bad
+        self._pc.forces3d[blocks, threads](d["position"], d["velocity"], self._volume(), self.kp, g["u"], g["v"],
+                                           g["w"], g["p"], float(gd.dx), float(gd.dy), float(gd.dz), *cp._periodic,
+                                           bool(cp._fold), bool(pressure), d["ext_force"], d["force"])
+        self.engine.device_changed(("ext_force", "force"))
+        return 0
+
 
 class DeviceGasCoupling3D(GasCoupling3D):
     """``GasCoupling3D`` whose particle side runs on the GPU engine's device arrays (module docstring); with a
@@ -193,15 +299,63 @@ class DeviceGasCoupling3D(GasCoupling3D):
                              "(voidage must lie in (0, 1], gas density > 0)")
         return self._face_beta, self._face_solids
 
+    def cell_beta(self, voidage, solids_u, solids_v, solids_w=None):
+        if self._device is None:
+            return super().cell_beta(voidage, solids_u, solids_v, solids_w)
+        gd = self.grid
+        if solids_w is None:
+            solids_w = np.zeros(gd.shape)
+        fields = [np.ascontiguousarray(a, dtype=float) for a in (voidage, solids_u, solids_v, solids_w)]
+        if any(f.shape != gd.shape for f in fields):
+            raise ValueError(f"voidage, solids_u, solids_v, solids_w must have shape {gd.shape}; "
+                             f"got {', '.join(str(f.shape) for f in fields)}")
+        self._check_gas()
+        beta = np.empty(gd.shape)
+        bad = self._device.cell_beta(*fields, beta)  # the particles' sums on the GPU
+        if bad:
+            raise ValueError(f"cell β: drag arguments out of range for {bad} particles "
+                             "(voidage must lie in (0, 1], gas density > 0)")
+        return beta
+
+    def _cell_coefficients(self, smap) -> tuple:
+        """``GasCoupling3D._cell_coefficients`` with the particles' sums on the device: the cell β (``cell_beta``)
+        and the pressure voidage (``DeviceExchange3D.pressure_voidage``); the face β and u_s of "cell" from the
+        cell arrays on the host (``_exchange3d_kernels.cell_faces3d``)."""
+        if self._device is None:
+            return super()._cell_coefficients(smap)
+        solids = (smap.solids_u, smap.solids_v, smap.solids_w)
+        cb = self.cell_beta(smap.voidage, *solids)
+        self._cell_inputs = (cb,) + tuple(solids)
+        beta, face_solids = cb, solids
+        if self.exchange == "cell":
+            beta, face_solids = fb, fs = self._face_beta, self._face_solids
+            X3.cell_faces3d(cb, *solids, *self._periodic, fb[0], fs[0], fb[1], fs[1], fb[2], fs[2])
+        self.last_map = smap
+        self.last_face_beta = beta if isinstance(beta, tuple) else None
+        self.last_beta = cb
+        pv = None
+        if self._pair_pressure:
+            pv = self._pressure_voidage
+            self._device.pressure_voidage(*pv)
+        return beta, face_solids, pv
+
     def set_particle_forces(self) -> None:
-        if self._device is not None and self._paired_ready:  # K_p of the step on the device
+        if self._device is not None and self._paired_ready:  # K_p or the cell inputs of the step on the device
             self._check_gas()
-            self._device.set_forces(self._split, bool(self.options.pressure_gradient_force))
+            if self.exchange == "cell":
+                self._device.set_cell_forces(bool(self.options.pressure_gradient_force))
+            elif self.exchange == "cell_beta":
+                bad = self._device.set_kp_forces(bool(self.options.pressure_gradient_force))
+                if bad:
+                    raise ValueError(f"particle drag: arguments out of range for {bad} particles "
+                                     "(voidage must lie in (0, 1], gas density > 0)")
+            else:
+                self._device.set_forces(self._split, bool(self.options.pressure_gradient_force))
             return
         super().set_particle_forces()
 
     def _fetch_kp(self) -> None:
-        if self._device is not None and self._paired_ready:
+        if self._device is not None and self._paired_ready and self.exchange == "particle":
             if self._kp.shape != (self._device.n,):
                 self._kp = np.zeros(self._device.n)
             self._device.fetch_kp(self._kp)
@@ -216,7 +370,7 @@ class DeviceGasCoupling3D(GasCoupling3D):
 
     def restore(self, arrays: dict[str, np.ndarray], scalars: dict) -> None:
         super().restore(arrays, scalars)
-        if self._device is not None and self._paired_ready:
+        if self._device is not None and self._paired_ready and self.exchange == "particle":
             self._device.put_kp(self._kp)
 
 

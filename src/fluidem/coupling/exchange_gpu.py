@@ -24,13 +24,13 @@ from .voidage import SolidsMap
 def refusals(coupling, dimensions: int = 2) -> list[str]:
     """What in the coupling of a GPU engine keeps its particle side on the host, one line each (empty: the
     device exchange runs it). ``dimensions`` of the gas grid: in 3D both voidage methods ('centroid',
-    'volume') have device kernels (``exchange3d_gpu``)."""
+    'volume') have device kernels (``exchange3d_gpu``), and every exchange ('cell', 'cell_beta':
+    ``_cell3d_cuda``)."""
     opts, out = coupling.options, []
     if opts.gpu_exchange == "host":
         out.append("coupling.gpu_exchange = 'host'")
-    if coupling.exchange not in ("particle", "cell") or (dimensions == 3 and coupling.exchange != "particle"):
-        runs = "'particle'" if dimensions == 3 else "'particle' and 'cell'"
-        out.append(f"coupling.momentum_exchange = {coupling.exchange!r} (the device runs {runs})")
+    if coupling.exchange not in ("particle", "cell") and dimensions == 2:
+        out.append(f"coupling.momentum_exchange = {coupling.exchange!r} (the device runs 'particle' and 'cell')")
     if dimensions == 2 and coupling.mapping.method not in ("centroid", "area", "area_volume"):
         out.append(f"coupling.voidage.method = {coupling.mapping.method!r} (the device maps 'centroid', 'area' and "
                    "'area_volume' on a 2D grid)")
@@ -90,7 +90,7 @@ class DeviceExchange:
         self._host_sauter = tuple(np.empty(gd.shape) for _ in self._sauter_sums)
         # the "cell" exchange: Σ β/(1 − ε) V_p, Σ V_p by ``_cell``, and the cell β, u_s, v_s the forces share
         self._cellx = {k: cuda.device_array(gd.shape) for k in ("sum", "solids", "beta", "su", "sv")} \
-            if coupling.exchange == "cell" else {}
+            if coupling.exchange in ("cell", "cell_beta") else {}
         self.gas_law = cuda.to_device(np.ascontiguousarray(coupling._gas_law)) if self._cellx else None
 
     @staticmethod

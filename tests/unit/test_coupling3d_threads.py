@@ -451,3 +451,16 @@ def test_face_sums_in_any_number_of_slabs(periodic, pair):
                 assert np.array_equal(E[a], E_ref[a] if pair else np.zeros(shapes[a])), (fold, m, a)
             if not periodic[0] and not fold:
                 assert A[0][nx].any()  # the wall face nx, held by the last slab
+
+
+def test_volume_deposit_without_velocity_sums():
+    """Velocity arrays of size 0: the same volumes, bitwise, on 1 and 2 threads (the map of number-weighted
+    velocities takes its weights from the centres)."""
+    periodic = (True, False, True)
+    pos, r, vel = packing(seed=3)
+    ref = reference_volume(pos, r, vel, periodic)[0]
+    none = np.empty((0, 0, 0))
+    for threads in (1, 2):
+        out = np.zeros(CELLS)
+        with_threads(threads, VK3.volume_deposit, pos, r, np.ones(N), vel, *SPACING, *periodic, out, none, none, none)
+        assert np.array_equal(out, ref)

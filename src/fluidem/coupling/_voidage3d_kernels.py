@@ -426,9 +426,11 @@ def _volume_add(lo, hi, position, radius, scale, velocity, dx, dy, dz, px, py, p
     """The sums of ``volume_deposit`` onto the cells whose (wrapped) x index lies in [lo, hi): the cells of
     ``_volume_range`` added in particle order (a sphere with the count −1 by ``sphere_box_volume`` of each
     cell, as the deposit was before node values); a sphere whose x cell range misses the slab is skipped from
-    its position (``_x_range_meets``). [0, nx) is the whole serial pass."""
+    its position (``_x_range_meets``). [0, nx) is the whole serial pass. ovx, ovy, ovz of size 0: the volumes
+    only."""
     nx, ny, nz = out.shape
     whole = lo <= 0 and hi >= nx
+    weigh = ovx.shape[0] > 0  # the velocity sums too
     for p in range(position.shape[0]):
         if not whole and not _x_range_meets(position[p, 0], radius[p], dx, nx, px, lo, hi):
             continue  # none of its cells in the slab: its scratch is not read
@@ -447,9 +449,10 @@ def _volume_add(lo, hi, position, radius, scale, velocity, dx, dy, dz, px, py, p
                 k = int(work[f + 2])
                 v = work[f + 3]
                 out[i, j, k] += v
-                ovx[i, j, k] += v * vx
-                ovy[i, j, k] += v * vy
-                ovz[i, j, k] += v * vz
+                if weigh:
+                    ovx[i, j, k] += v * vx
+                    ovy[i, j, k] += v * vy
+                    ovz[i, j, k] += v * vz
             continue
         r = radius[p]
         x = position[p, 0]
@@ -472,9 +475,10 @@ def _volume_add(lo, hi, position, radius, scale, velocity, dx, dy, dz, px, py, p
                         v *= scale[p]
                         jj, kk = j % ny, k % nz
                         out[ii, jj, kk] += v
-                        ovx[ii, jj, kk] += v * vx
-                        ovy[ii, jj, kk] += v * vy
-                        ovz[ii, jj, kk] += v * vz
+                        if weigh:
+                            ovx[ii, jj, kk] += v * vx
+                            ovy[ii, jj, kk] += v * vy
+                            ovz[ii, jj, kk] += v * vz
 
 
 @njit(cache=True, parallel=True)
@@ -493,7 +497,8 @@ def _volume_add_parallel(position, radius, scale, velocity, dx, dy, dz, px, py, 
 def volume_deposit(position, radius, scale, velocity, dx, dy, dz, px, py, pz, out, ovx, ovy, ovz, work=None):
     """Add scale[p] V_pc (and scale[p] V_pc v[p]) to every cell c that the sphere of p overlaps, V_pc the exact
     volume of the sphere in the cell (``sphere_box_volume`` to round-off, by the roads of the module docstring; periodic axes wrapped, non-periodic edge cells unbounded). position, velocity : (N, 3);
-    radius, scale : (N,); out, ovx, ovy, ovz : (nx, ny, nz), accumulated into. work : (≥ N ``volume_stride``,)
+    radius, scale : (N,); out, ovx, ovy, ovz : (nx, ny, nz), accumulated into (ovx, ovy, ovz of size 0, e.g.
+    (0, 0, 0): the volumes only). work : (≥ N ``volume_stride``,)
     float64 scratch (allocated here if None or shorter)."""
     nx, ny, nz = out.shape
     n = position.shape[0]
@@ -640,7 +645,12 @@ def deposit_solids3d(method, weighting, position, radius, volume, velocity, dx, 
     if method == 0:
         centroid_deposit3d(position, volume, velocity, dx, dy, dz, frac, wvx, wvy, wvz, work)  # Sun 2007 eq. 34
     else:
-        volume_deposit(position, radius, np.ones(n), velocity, dx, dy, dz, px, py, pz, frac, wvx, wvy, wvz, work)
+        if weighting == 0:  # the velocity weights come from the centres below
+            none = np.empty((0, 0, 0))
+            volume_deposit(position, radius, np.ones(n), velocity, dx, dy, dz, px, py, pz, frac, none, none, none,
+                           work)
+        else:
+            volume_deposit(position, radius, np.ones(n), velocity, dx, dy, dz, px, py, pz, frac, wvx, wvy, wvz, work)
     wsum[:, :, :] = frac
     frac[:, :, :] /= norm
     if weighting == 0:  # Hoomans 1996 eq. 50: by centres, each particle counts once

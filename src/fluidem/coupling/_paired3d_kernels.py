@@ -143,6 +143,65 @@ def _gas_at3(x, y, z, u, v, w, p, idx, idy, idz, nx, ny, nz, px, py, pz, fold, p
 
 
 @njit(cache=True, error_model="numpy")
+def _face_gradients3(p, idx, idy, idz, px, py, pz):
+    """(GX, GY, GZ): ∂p/∂x on every x-face, (nx + 1, ny, nz), ∂p/∂y on every y-face and ∂p/∂z on every z-face
+    [Pa/m] (``_face_gradient3``), for the force passes: each face's gradient once per pass, not once per
+    particle around it."""
+    nx, ny, nz = p.shape
+    GX = np.empty((nx + 1, ny, nz))
+    GY = np.empty((nx, ny + 1, nz))
+    GZ = np.empty((nx, ny, nz + 1))
+    for i in range(nx + 1):
+        for j in range(ny):
+            for k in range(nz):
+                GX[i, j, k] = _face_gradient3(p, 0, i, j, k, nx, idx, px)
+    for i in range(nx):
+        for j in range(ny + 1):
+            for k in range(nz):
+                GY[i, j, k] = _face_gradient3(p, 1, i, j, k, ny, idy, py)
+    for i in range(nx):
+        for j in range(ny):
+            for k in range(nz + 1):
+                GZ[i, j, k] = _face_gradient3(p, 2, i, j, k, nz, idz, pz)
+    return GX, GY, GZ
+
+
+@njit(cache=True, inline="always")
+def _face_mean3(G, i0, i1, a0, a1, j0, j1, b0, b1, k0, k1, c0, c1):
+    """``_gradient_mean`` from the face gradients G of ``_face_gradients3``: the same products added in the
+    same order."""
+    out = 0.0
+    for s in range(2):
+        ii = i0 if s == 0 else i1
+        wa = a0 if s == 0 else a1
+        for t in range(2):
+            jj = j0 if t == 0 else j1
+            wb = b0 if t == 0 else b1
+            for u in range(2):
+                kk = k0 if u == 0 else k1
+                wc = c0 if u == 0 else c1
+                out += wa * wb * wc * G[ii, jj, kk]
+    return out
+
+
+@njit(cache=True, inline="always")
+def _gas_at3_faces(x, y, z, u, v, w, GX, GY, GZ, idx, idy, idz, nx, ny, nz, px, py, pz, fold, pressure):
+    """``_gas_at3`` with ∇p from the face gradients of ``_face_gradients3`` (bitwise the same numbers)."""
+    ci0, ci1, cwx0, cwx1, fi0, fi1, fwx0, fwx1 = _axis(x, idx, nx, px, fold)
+    cj0, cj1, cwy0, cwy1, fj0, fj1, fwy0, fwy1 = _axis(y, idy, ny, py, fold)
+    ck0, ck1, cwz0, cwz1, fk0, fk1, fwz0, fwz1 = _axis(z, idz, nz, pz, fold)
+    ug = _mean3(u, fi0, fi1, fwx0, fwx1, cj0, cj1, cwy0, cwy1, ck0, ck1, cwz0, cwz1)
+    vg = _mean3(v, ci0, ci1, cwx0, cwx1, fj0, fj1, fwy0, fwy1, ck0, ck1, cwz0, cwz1)
+    wg = _mean3(w, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, fk0, fk1, fwz0, fwz1)
+    gx = gy = gz = 0.0
+    if pressure:
+        gx = _face_mean3(GX, fi0, fi1, fwx0, fwx1, cj0, cj1, cwy0, cwy1, ck0, ck1, cwz0, cwz1)
+        gy = _face_mean3(GY, ci0, ci1, cwx0, cwx1, fj0, fj1, fwy0, fwy1, ck0, ck1, cwz0, cwz1)
+        gz = _face_mean3(GZ, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, fk0, fk1, fwz0, fwz1)
+    return ug, vg, wg, gx, gy, gz
+
+
+@njit(cache=True, error_model="numpy")
 def sample3d(position, u, v, w, voidage, dx, dy, dz, px, py, pz, fold, out):
     """out[q] = (u, v, w, ε) at point q: the face velocities and the centre voidage interpolated trilinearly
     (Hoomans 1996 eqs 40-41 in 3D) with the weights of ``deposit3d``. position (N, 3); out (N, 4)."""
@@ -391,14 +450,23 @@ def deposit3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu
 
 
 @njit(cache=True, error_model="numpy")
-def _forces_range(lo, hi, position, velocity, volume, kp, u, v, w, p, idx, idy, idz, px, py, pz, fold, pressure_force,
-                  out, total):
+def _pressure_faces(p, idx, idy, idz, px, py, pz, pressure):
+    """``_face_gradients3`` where the pressure force is on, else three empty arrays."""
+    if pressure:
+        return _face_gradients3(p, idx, idy, idz, px, py, pz)
+    e = np.empty((0, 0, 0))
+    return e, e, e
+
+
+@njit(cache=True, error_model="numpy")
+def _forces_range(lo, hi, position, velocity, volume, kp, u, v, w, GX, GY, GZ, idx, idy, idz, px, py, pz, fold,
+                  pressure_force, out, total):
     """``particle_forces3d`` for the particles [lo, hi)."""
-    nx, ny, nz = p.shape
+    nx, ny, nz = u.shape[0] - 1, u.shape[1], u.shape[2]
     follow = total.shape[0] > 0
     for q in range(lo, hi):
-        ug, vg, wg, gx, gy, gz = _gas_at3(position[q, 0], position[q, 1], position[q, 2], u, v, w, p, idx, idy, idz,
-                                          nx, ny, nz, px, py, pz, fold, pressure_force)
+        ug, vg, wg, gx, gy, gz = _gas_at3_faces(position[q, 0], position[q, 1], position[q, 2], u, v, w, GX, GY, GZ,
+                                                idx, idy, idz, nx, ny, nz, px, py, pz, fold, pressure_force)
         k = kp[q]
         fx = k * (ug - velocity[q, 0])
         fy = k * (vg - velocity[q, 1])
@@ -411,13 +479,13 @@ def _forces_range(lo, hi, position, velocity, volume, kp, u, v, w, p, idx, idy, 
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
-def _forces_parallel(position, velocity, volume, kp, u, v, w, p, idx, idy, idz, px, py, pz, fold, pressure_force, out,
-                     total):
+def _forces_parallel(position, velocity, volume, kp, u, v, w, GX, GY, GZ, idx, idy, idz, px, py, pz, fold,
+                     pressure_force, out, total):
     """``_forces_range`` over all particles in chunks of CHUNK on all threads."""
     n = position.shape[0]
     for c in prange((n + CHUNK - 1) // CHUNK):
-        _forces_range(c * CHUNK, min(n, (c + 1) * CHUNK), position, velocity, volume, kp, u, v, w, p, idx, idy, idz,
-                      px, py, pz, fold, pressure_force, out, total)
+        _forces_range(c * CHUNK, min(n, (c + 1) * CHUNK), position, velocity, volume, kp, u, v, w, GX, GY, GZ, idx,
+                      idy, idz, px, py, pz, fold, pressure_force, out, total)
 
 
 @njit(cache=True, error_model="numpy")
@@ -428,22 +496,23 @@ def particle_forces3d(position, velocity, volume, kp, u, v, w, p, dx, dy, dz, px
     chunks above CHUNK."""
     n = position.shape[0]
     idx, idy, idz = 1.0 / dx, 1.0 / dy, 1.0 / dz
+    GX, GY, GZ = _pressure_faces(p, idx, idy, idz, px, py, pz, pressure_force)
     if n > CHUNK:
-        _forces_parallel(position, velocity, volume, kp, u, v, w, p, idx, idy, idz, px, py, pz, fold, pressure_force,
-                         out, total)
+        _forces_parallel(position, velocity, volume, kp, u, v, w, GX, GY, GZ, idx, idy, idz, px, py, pz, fold,
+                         pressure_force, out, total)
     else:
-        _forces_range(0, n, position, velocity, volume, kp, u, v, w, p, idx, idy, idz, px, py, pz, fold,
+        _forces_range(0, n, position, velocity, volume, kp, u, v, w, GX, GY, GZ, idx, idy, idz, px, py, pz, fold,
                       pressure_force, out, total)
 
 
 @njit(cache=True, error_model="numpy")
-def _split_range(lo, hi, position, velocity, volume, kp, u, v, w, p, idx, idy, idz, px, py, pz, fold, pressure_force,
-                 ext, damp, total):
+def _split_range(lo, hi, position, velocity, volume, kp, u, v, w, GX, GY, GZ, idx, idy, idz, px, py, pz, fold,
+                 pressure_force, ext, damp, total):
     """``particle_forces_split3d`` for the particles [lo, hi)."""
-    nx, ny, nz = p.shape
+    nx, ny, nz = u.shape[0] - 1, u.shape[1], u.shape[2]
     for q in range(lo, hi):
-        ug, vg, wg, gx, gy, gz = _gas_at3(position[q, 0], position[q, 1], position[q, 2], u, v, w, p, idx, idy, idz,
-                                          nx, ny, nz, px, py, pz, fold, pressure_force)
+        ug, vg, wg, gx, gy, gz = _gas_at3_faces(position[q, 0], position[q, 1], position[q, 2], u, v, w, GX, GY, GZ,
+                                                idx, idy, idz, nx, ny, nz, px, py, pz, fold, pressure_force)
         k = kp[q]
         a0 = k * ug
         a1 = k * vg
@@ -462,13 +531,13 @@ def _split_range(lo, hi, position, velocity, volume, kp, u, v, w, p, idx, idy, i
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
-def _split_parallel(position, velocity, volume, kp, u, v, w, p, idx, idy, idz, px, py, pz, fold, pressure_force, ext,
-                    damp, total):
+def _split_parallel(position, velocity, volume, kp, u, v, w, GX, GY, GZ, idx, idy, idz, px, py, pz, fold,
+                    pressure_force, ext, damp, total):
     """``_split_range`` over all particles in chunks of CHUNK on all threads."""
     n = position.shape[0]
     for c in prange((n + CHUNK - 1) // CHUNK):
-        _split_range(c * CHUNK, min(n, (c + 1) * CHUNK), position, velocity, volume, kp, u, v, w, p, idx, idy, idz,
-                     px, py, pz, fold, pressure_force, ext, damp, total)
+        _split_range(c * CHUNK, min(n, (c + 1) * CHUNK), position, velocity, volume, kp, u, v, w, GX, GY, GZ, idx,
+                     idy, idz, px, py, pz, fold, pressure_force, ext, damp, total)
 
 
 @njit(cache=True, error_model="numpy")
@@ -481,9 +550,10 @@ def particle_forces_split3d(position, velocity, volume, kp, u, v, w, p, dx, dy, 
     chunks above CHUNK."""
     n = position.shape[0]
     idx, idy, idz = 1.0 / dx, 1.0 / dy, 1.0 / dz
+    GX, GY, GZ = _pressure_faces(p, idx, idy, idz, px, py, pz, pressure_force)
     if n > CHUNK:
-        _split_parallel(position, velocity, volume, kp, u, v, w, p, idx, idy, idz, px, py, pz, fold, pressure_force,
-                        ext, damp, total)
+        _split_parallel(position, velocity, volume, kp, u, v, w, GX, GY, GZ, idx, idy, idz, px, py, pz, fold,
+                        pressure_force, ext, damp, total)
     else:
-        _split_range(0, n, position, velocity, volume, kp, u, v, w, p, idx, idy, idz, px, py, pz, fold,
+        _split_range(0, n, position, velocity, volume, kp, u, v, w, GX, GY, GZ, idx, idy, idz, px, py, pz, fold,
                      pressure_force, ext, damp, total)

@@ -1,7 +1,8 @@
 """The particle side of the gas coupling on the GPU against the CPU kernels it mirrors.
 
 ``coupling._voidage_cuda.centroid_deposit`` against ``_voidage_kernels.deposit_solids``, and
-``coupling._paired_cuda`` (``deposit``, ``forces_split``, ``forces``) against ``_paired_kernels``, on a small
+``coupling._paired_cuda`` (``deposit``, ``forces_split``, ``forces``) against ``_paired_kernels``,
+``coupling._cell_cuda.gas_forces`` (the "cell_beta" force) against ``_exchange_kernels.gas_forces``, on a small
 random system: particles scattered over a 4 × 6 grid and a little beyond it, random gas fields, every
 registered drag law, folded and unfolded boundary faces, a periodic axis.
 

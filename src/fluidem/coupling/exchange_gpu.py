@@ -7,10 +7,11 @@ the voidage map's deposit by centre or by exact disc areas and the cells' Sauter
 (``_paired_cuda.deposit``), and the gas force on each particle (``_paired_cuda.forces``, ``forces_split``); for
 the ``cell`` exchange the cell β sums, the pressure voidage's face sums and each particle's share of its cell's
 drag (``_cell_cuda``); for ``cell_beta`` the same cell β sums and each particle's own drag at the current gas
-(``_cell_cuda.gas_forces``, the CPU's ``_exchange_kernels.gas_forces`` per particle). Per gas step only cell and face arrays cross between host and device: the gas fields go
-to the device, the deposited sums come back, and the host finishes them with the CPU's own kernels
-(``_voidage_kernels.finish_map``, ``_paired_kernels._face_coefficients``, ``_face_voidage``). K_p stays on the
-device; ``fetch_kp`` brings it to the host for checkpoints and ``exchange_balance``.
+(``_cell_cuda.gas_forces``, the CPU's ``_exchange_kernels.gas_forces`` per particle). Per gas step only cell
+and face arrays cross between host and device: the gas fields go to the device, the deposited sums come back,
+and the host finishes them with the CPU's own kernels (``_voidage_kernels.finish_map``,
+``_paired_kernels._face_coefficients``, ``_face_voidage``). K_p stays on the device; ``fetch_kp`` brings it to
+the host for checkpoints and ``exchange_balance``.
 """
 from __future__ import annotations
 

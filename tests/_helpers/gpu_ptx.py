@@ -49,15 +49,16 @@ def coupling_signatures(VC, PC, T) -> dict:
 
 
 def cell_signatures(CC, T) -> dict:
-    """{kernel: argument types} of the 2D "cell" exchange's device kernels as ``coupling.exchange_gpu`` launches
-    them."""
-    f1, f2, i1 = T.float64[::1], T.float64[:, ::1], T.int32[::1]
+    """{kernel: argument types} of the 2D "cell" and "cell_beta" exchanges' device kernels as
+    ``coupling.exchange_gpu`` launches them."""
+    f1, f2, f3, i1 = T.float64[::1], T.float64[:, ::1], T.float64[:, :, ::1], T.int32[::1]
     b, f = T.boolean, T.float64
     return {
         CC.cell_beta_deposit: (f1, f2, f1, f1) + (f2,) * 6 + (f, f2, f, f, f2, i1),
         CC.pressure_deposit: (f2, f1, f, f, b, b, f2, f2),
         CC.cell_solids: (f2, f1, f, f, f2),
         CC.forces: (f2, f1) + (f2,) * 7 + (f, f, f, b, b, b, f2, f2),
+        CC.gas_forces: (f1, f2, f2, f1, f1, f3, f3, f3, f2) + (f1,) * 4 + (f,) * 4 + (b, b, f2, f2, i1),
     }
 
 

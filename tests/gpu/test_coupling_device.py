@@ -1,7 +1,8 @@
 """The particle side of the gas coupling on the GPU against the CPU kernels it mirrors.
 
 ``coupling._voidage_cuda.centroid_deposit`` against ``_voidage_kernels.deposit_solids``, and
-``coupling._paired_cuda`` (``deposit``, ``forces_split``, ``forces``) against ``_paired_kernels``, on a small
+``coupling._paired_cuda`` (``deposit``, ``forces_split``, ``forces``) against ``_paired_kernels``,
+``coupling._cell_cuda.gas_forces`` (the "cell_beta" force) against ``_exchange_kernels.gas_forces``, on a small
 random system: particles scattered over a 4 × 6 grid and a little beyond it, random gas fields, every
 registered drag law, folded and unfolded boundary faces, a periodic axis.
 
@@ -298,6 +299,42 @@ def test_cell_forces_match_cpu(pressure, px):
         assert np.all(np.abs(got - cpu) <= PER_PARTICLE_RTOL * np.abs(cpu).max())
 
 
+@pytest.mark.parametrize("pressure,mixture", [(True, False), (False, True)])
+def test_gas_forces_match_cpu(pressure, mixture):
+    """``_cell_cuda.gas_forces`` (the "cell_beta" exchange's force on each particle) against
+    ``_exchange_kernels.gas_forces``: particles straddling cell faces and outside the grid, a polydisperse 1/D̄
+    field, one cell of negative gas density (NaN forces, counted), total following ext."""
+    from fluidem.coupling import _cell_cuda as CC
+    from fluidem.coupling import _exchange_kernels as EK
+    from fluidem.coupling import interpolation as I
+    from fluidem.gas.grid import StaggeredGrid
+
+    pos, vel, radius, volume, gas = _system(seed=13)
+    law = drag_laws.get("gidaspow")().pack()
+    rng = np.random.default_rng(4)
+    inv_dbar = rng.uniform(800.0, 1200.0, (NX, NY)) if mixture else np.zeros((0, 0))
+    grid = StaggeredGrid((NX, NY), (NX * DX, NY * DY))
+    nodes = (*I._axes(grid, "centre")[:2], grid.x_faces, grid.y_faces)
+    ext, total = rng.normal(size=(pos.shape[0], 3)), rng.normal(size=(pos.shape[0], 3))
+    d_ext, d_total = _dev(ext, total)
+    bad = EK.gas_forces(law, pos, vel, radius, volume, gas["u"], gas["v"], gas["voidage"], gas["rho"], gas["p"], MU,
+                        inv_dbar, *nodes, DX, DY, 0.3, pressure, True, ext, total)
+    assert 0 < bad < pos.shape[0] // 2
+    cen, xfa, yfa = np.empty((NX + 2, NY + 2, 2)), np.zeros((NX + 1, NY + 2, 2)), np.zeros((NX + 2, NY + 1, 2))
+    dbar = np.empty((NX + 2, NY + 2) if mixture else (0, 0))
+    EK.gas_force_fields(gas["u"], gas["v"], gas["voidage"], gas["rho"], gas["p"], inv_dbar, DX, DY, pressure, cen,
+                        xfa, yfa, dbar)
+    d_bad = _dev(np.zeros(1, dtype=np.int32))[0]
+    CC.gas_forces[1, CC.THREADS](*_dev(law, pos, vel, radius, volume, cen, xfa, yfa, dbar, *nodes), DX, DY, MU, 0.3,
+                                 pressure, True, d_ext, d_total, d_bad)
+    assert int(d_bad.copy_to_host()[0]) == bad
+    for cpu, dev in ((ext, d_ext), (total, d_total)):
+        got = dev.copy_to_host()
+        assert np.array_equal(np.isnan(got), np.isnan(cpu))
+        ok = ~np.isnan(cpu)
+        assert np.all(np.abs(got[ok] - cpu[ok]) <= PER_PARTICLE_RTOL * np.abs(cpu[ok]).max())
+
+
 def _bed(packing_case, coupling, n=150, two_species=False):
     """A 2D bed of n discs of 4 mm (3.6 mm with ``two_species``) on a 4 × 12 gas grid, gas from below, walls
     left and right, the coupling section ``coupling``."""
@@ -318,6 +355,7 @@ COUPLED_OPTIONS = {
     "area_volume": ({"voidage": {"method": "area_volume", "velocity_weighting": "volume"}}, False),
     "sauter_y2": ({"polydisperse": "sauter_y2"}, True),
     "cell": ({"momentum_exchange": "cell"}, False),
+    "cell_beta": ({"momentum_exchange": "cell_beta"}, False),
 }
 
 

@@ -105,7 +105,7 @@ def test_gpu_kernels_compile_to_ptx():
     r = subprocess.run([sys.executable, str(ROOT / "tests" / "_helpers" / "gpu_ptx.py"), "9", "0"], env=env,
                        capture_output=True, text=True, timeout=SIMULATOR_TIMEOUT)
     assert r.returncode == 0, (r.stdout + r.stderr)[-3000:]
-    assert r.stdout.count("characters of PTX") == 26, r.stdout  # 8 of the particle step, 7 + 4 + 7 of the coupling
+    assert r.stdout.count("characters of PTX") == 27, r.stdout  # 8 of the particle step, 7 + 5 + 7 of the coupling
 
 
 def test_contact_physics_the_gpu_path_lacks_is_refused_by_name():
@@ -141,8 +141,8 @@ def test_coupling_options_the_device_exchange_lacks_keep_it_on_the_host():
     assert refusals(coupling(load_case("tsuji-jet", {"coupling.gpu_exchange": "host"}))) == [
         "coupling.gpu_exchange = 'host'"]
     assert refusals(coupling(load_case("goldschmidt-sun-method"))) == []  # the "cell" exchange on the device too
-    assert refusals(coupling(load_case("tsuji-jet", {"coupling.momentum_exchange": "cell_beta"}))) == [
-        "coupling.momentum_exchange = 'cell_beta' (the device runs 'particle' and 'cell')"]
+    # "cell_beta" too: its cell β as "cell", each particle's drag by ``_cell_cuda.gas_forces``
+    assert refusals(coupling(load_case("tsuji-jet", {"coupling.momentum_exchange": "cell_beta"}))) == []
     for method in ("area", "area_volume"):  # the exact disc areas of Hoomans 1996 §3.4 on the device too
         assert refusals(coupling(load_case("tsuji-jet", {"coupling.voidage.method": method}))) == []
     assert refusals(coupling(load_case("bubbling-pseudo2d"))) == []

@@ -5,7 +5,8 @@ The per-particle arithmetic is the CPU's own source compiled for the device (``d
 ``device_tree``): the cell of a centre (``_exchange_kernels._cell``), a particle's β/(1 − ε) at its cell's
 voidage, gas density and slip (``_exchange_kernels.cell_drag``, Sun 2007 eq. 33, y = d/D̄ of the cell for the
 polydisperse drag), the folded stencil of the pressure voidage (``_paired_kernels._stencil``) and a particle's
-share of its cell's drag with −V_p ∇p (``_paired_kernels.cell_force``).
+share of its cell's drag with −V_p ∇p (``_paired_kernels.cell_force``), a particle's drag and pressure force at its
+interpolated gas (``_exchange_kernels.gas_force_one``).
 
 ``cell_beta_deposit``  Σ_p β/(1 − ε) V_p of the particles centred in each cell (the host divides by V_cell);
                        a particle whose drag arguments are out of range adds nothing and counts in bad[0].
@@ -13,6 +14,9 @@ share of its cell's drag with −V_p ∇p (``_paired_kernels.cell_force``).
                        ε_p,f = 1 − Σ/V_f: ``_paired_kernels._face_voidage``).
 ``cell_solids``        Σ V_p of the particles centred in each cell, by ``_cell`` (the share's denominator).
 ``forces``             F_p = V_p/Σ V_r β_c V_c (u_c − u_s,c) − V_p ∇p_p into ext, the total following.
+``gas_forces``         F_p = β V_p/(1 − ε_p) (u_p − v_p) − V_p ∇p_p (Sun 2007 eqs 28-29) at the particle's
+                       interpolated gas, into ext, the total following: the "cell_beta" exchange's own drag
+                       (``_exchange_kernels.gas_force_one``, the CPU's ``gas_forces`` one particle per thread).
 
 The sums are atomic: the CPU's to round-off, added in another order.
 """
@@ -92,3 +96,26 @@ def forces(position, volume, solids, beta, solids_u, solids_v, u, v, p, dx, dy, 
     fx, fy = cell_force(x, y, volume[q], cell_of(x, dx, nx), cell_of(y, dy, ny), solids, beta, solids_u, solids_v,
                         u, v, p, 1.0 / dx, 1.0 / dy, cell_volume, px, py, pressure_force)
     store_force(ext, total, q, fx, fy, 0.0, True)
+
+
+gas_force_one = device_tree(EK.gas_force_one, beta_per_solids=beta_per_solids)
+
+
+@cached_kernel
+def gas_forces(law, position, velocity, radius, volume, cen, xfa, yfa, dbar, xc, yc, xf, yf, dx, dy, mu, min_voidage,
+               pressure_force, dim2, ext, total, bad):
+    """ext[q] = β V_q/(1 − ε) (u − v_q) − V_q ∇p (Sun 2007 eqs 28-29) at particle q's interpolated gas (Hoomans 1996
+    eqs 40-41), total[q] += its change: ``_exchange_kernels.gas_forces``' per-particle pass
+    (``gas_force_one``), one particle per thread, for the "cell_beta" exchange. cen, xfa, yfa, dbar: the
+    wall-extended fields of ``_exchange_kernels.gas_force_fields``; xc, yc, xf, yf its interpolation nodes. A
+    particle whose drag arguments are out of range gets NaN and counts in bad[0]. position, velocity, ext,
+    total : (N, 3); radius, volume : (N,)."""
+    q = cuda.grid(1)
+    if q >= position.shape[0]:
+        return
+    ok, fx, fy, fz = gas_force_one(law, q, position, velocity, radius, volume, cen, xfa, yfa, dbar,
+                                   dbar.shape[0] > 0, xc, yc, xf, yf, 1.0 / dx, 1.0 / dy, mu, min_voidage,
+                                   pressure_force, dim2, velocity.shape[1] > 2)
+    if not ok:
+        cuda.atomic.add(bad, 0, 1)
+    store_force(ext, total, q, fx, fy, fz, True)

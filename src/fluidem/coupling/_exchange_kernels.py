@@ -148,68 +148,90 @@ def gas_forces(law, position, velocity, radius, volume, u, v, voidage, rho, p, m
     costs more than it saves, and beside the DEM of large beds this kernel is small.
     """
     nx, ny = voidage.shape
+    mixture = inv_dbar.shape[0] > 0
+    cen = np.empty((nx + 2, ny + 2, 2))
+    xfa = np.zeros((nx + 1, ny + 2, 2))
+    yfa = np.zeros((nx + 2, ny + 1, 2))
+    dbar = np.empty((nx + 2, ny + 2) if mixture else (0, 0))
+    gas_force_fields(u, v, voidage, rho, p, inv_dbar, dx, dy, pressure_force, cen, xfa, yfa, dbar)
     inv_dx = 1.0 / dx
     inv_dy = 1.0 / dy
-    cen = np.empty((nx + 2, ny + 2, 2))  # ε, ρ at the wall-extended centres
+    three = velocity.shape[1] > 2
+    follow = total.shape[0] > 0
+    bad = 0
+    for q in range(position.shape[0]):
+        ok, fx, fy, fz = gas_force_one(law, q, position, velocity, radius, volume, cen, xfa, yfa, dbar, mixture, xc,
+                                       yc, xf, yf, inv_dx, inv_dy, mu, min_voidage, pressure_force, dim2, three)
+        if not ok:
+            bad += 1
+        store_force(out, total, q, fx, fy, fz, follow)
+    return bad
+
+
+@njit(cache=True)
+def gas_force_fields(u, v, voidage, rho, p, inv_dbar, dx, dy, pressure_force, cen, xfa, yfa, dbar):
+    """The wall-extended node fields ``gas_forces`` interpolates (``interpolation.sample_gas``' rules, Hoomans
+    1996 eqs 40-41): cen (nx + 2, ny + 2, 2) ← ε, ρ at the centres (wall values copied); xfa (nx + 1, ny + 2, 2)
+    ← u (linearly extrapolated) and, with ``pressure_force``, ∂p/∂x on x-faces; yfa (nx + 2, ny + 1, 2) ← v and
+    ∂p/∂y on y-faces (xfa, yfa zeroed by the caller); dbar (nx + 2, ny + 2) ← 1/D̄ at the centres (copied), or
+    (0, 0) for a monodisperse drag."""
     pad(voidage, True, True, False, cen[:, :, 0])
     pad(rho, True, True, False, cen[:, :, 1])
-    xfa = np.zeros((nx + 1, ny + 2, 2))  # u, ∂p/∂x on x-faces
     pad(u, False, True, True, xfa[:, :, 0])
-    yfa = np.zeros((nx + 2, ny + 1, 2))  # v, ∂p/∂y on y-faces
     pad(v, True, False, True, yfa[:, :, 0])
     if pressure_force:
+        nx, ny = voidage.shape
         gx = np.empty((nx + 1, ny))
         gy = np.empty((nx, ny + 1))
         face_gradients(p, dx, dy, gx, gy)
         pad(gx, False, True, False, xfa[:, :, 1])
         pad(gy, True, False, False, yfa[:, :, 1])
-    three = velocity.shape[1] > 2
-    follow = total.shape[0] > 0
-    mixture = inv_dbar.shape[0] > 0
-    dbar = np.empty((nx + 2, ny + 2) if mixture else (0, 0))  # 1/D̄ at the wall-extended centres
-    if mixture:
+    if dbar.shape[0] > 0:
         pad(inv_dbar, True, True, False, dbar)
-    bad = 0
-    for q in range(position.shape[0]):
-        x = position[q, 0]
-        y = position[q, 1]
-        ic, txc = locate(x, xc, inv_dx, 0.5)
-        jc, tyc = locate(y, yc, inv_dy, 0.5)
-        i_f, txf = locate(x, xf, inv_dx, 0.0)
-        j_f, tyf = locate(y, yf, inv_dy, 0.0)
-        eps, rg = _mean2(cen, ic, jc, _weights(txc, tyc))
-        ug, dpdx = _mean2(xfa, i_f, jc, _weights(txf, tyc))
-        vg, dpdy = _mean2(yfa, ic, j_f, _weights(txc, tyf))
-        if eps < min_voidage:
-            eps = min_voidage
-        elif eps > 1.0:
-            eps = 1.0
-        wx = ug - velocity[q, 0]
-        wy = vg - velocity[q, 1]
-        wz = 0.0
-        if three:
-            wz = 0.0 - velocity[q, 2]
-        slip = math.sqrt(wx * wx + wy * wy + wz * wz)
-        d = 2.0 * radius[q]
-        if _drag_arguments_valid(eps, slip, d, rg, mu):
-            yq = 1.0
-            if mixture:
-                w = _weights(txc, tyc)
-                yq = d * (w[0] * dbar[ic, jc] + w[1] * dbar[ic + 1, jc] + w[2] * dbar[ic + 1, jc + 1]
-                          + w[3] * dbar[ic, jc + 1])
-            c = beta_per_solids(law, eps, slip, d, rg, mu, yq) * volume[q]  # β V_p/(1 − ε), eq. 29
-            fx = c * wx
-            fy = c * wy
-            fz = c * wz
-            if pressure_force:  # −V_p ∇p, eq. 28
-                fx -= volume[q] * dpdx
-                fy -= volume[q] * dpdy
-            if dim2:
-                fz = 0.0
-        else:
-            bad += 1
-            fx = math.nan
-            fy = math.nan
-            fz = math.nan
-        store_force(out, total, q, fx, fy, fz, follow)
-    return bad
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def gas_force_one(law, q, position, velocity, radius, volume, cen, xfa, yfa, dbar, mixture, xc, yc, xf, yf, inv_dx,
+                  inv_dy, mu, min_voidage, pressure_force, dim2, three):
+    """(in range, fx, fy, fz): the gas force on particle q [N] of ``gas_forces``: β V_q/(1 − ε) (u − v_q) (Sun
+    2007 eq. 29), minus V_q ∇p if ``pressure_force`` (eq. 28), with u, ε (clipped to [min_voidage, 1]), ρ, ∇p
+    and 1/D̄ (``mixture``) area-weighted from the four nodes around the centre (Hoomans 1996 eqs 40-41) of the
+    fields of ``gas_force_fields``; z 0 if ``dim2``, the z velocity read if ``three``. (False, NaN, NaN, NaN)
+    where the drag arguments are out of range."""
+    x = position[q, 0]
+    y = position[q, 1]
+    ic, txc = locate(x, xc, inv_dx, 0.5)
+    jc, tyc = locate(y, yc, inv_dy, 0.5)
+    i_f, txf = locate(x, xf, inv_dx, 0.0)
+    j_f, tyf = locate(y, yf, inv_dy, 0.0)
+    eps, rg = _mean2(cen, ic, jc, _weights(txc, tyc))
+    ug, dpdx = _mean2(xfa, i_f, jc, _weights(txf, tyc))
+    vg, dpdy = _mean2(yfa, ic, j_f, _weights(txc, tyf))
+    if eps < min_voidage:
+        eps = min_voidage
+    elif eps > 1.0:
+        eps = 1.0
+    wx = ug - velocity[q, 0]
+    wy = vg - velocity[q, 1]
+    wz = 0.0
+    if three:
+        wz = 0.0 - velocity[q, 2]
+    slip = math.sqrt(wx * wx + wy * wy + wz * wz)
+    d = 2.0 * radius[q]
+    if not _drag_arguments_valid(eps, slip, d, rg, mu):
+        return False, math.nan, math.nan, math.nan
+    yq = 1.0
+    if mixture:
+        w = _weights(txc, tyc)
+        yq = d * (w[0] * dbar[ic, jc] + w[1] * dbar[ic + 1, jc] + w[2] * dbar[ic + 1, jc + 1]
+                  + w[3] * dbar[ic, jc + 1])
+    c = beta_per_solids(law, eps, slip, d, rg, mu, yq) * volume[q]  # β V_p/(1 − ε), eq. 29
+    fx = c * wx
+    fy = c * wy
+    fz = c * wz
+    if pressure_force:  # −V_p ∇p, eq. 28
+        fx -= volume[q] * dpdx
+        fy -= volume[q] * dpdy
+    if dim2:
+        fz = 0.0
+    return True, fx, fy, fz

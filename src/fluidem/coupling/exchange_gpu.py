@@ -6,10 +6,12 @@ the voidage map's deposit by centre or by exact disc areas and the cells' Sauter
 (``_voidage_cuda``), each particle's drag coefficient and the face sums of the ``particle`` exchange
 (``_paired_cuda.deposit``), and the gas force on each particle (``_paired_cuda.forces``, ``forces_split``); for
 the ``cell`` exchange the cell β sums, the pressure voidage's face sums and each particle's share of its cell's
-drag (``_cell_cuda``). Per gas step only cell and face arrays cross between host and device: the gas fields go
-to the device, the deposited sums come back, and the host finishes them with the CPU's own kernels
-(``_voidage_kernels.finish_map``, ``_paired_kernels._face_coefficients``, ``_face_voidage``). K_p stays on the
-device; ``fetch_kp`` brings it to the host for checkpoints and ``exchange_balance``.
+drag (``_cell_cuda``); for ``cell_beta`` the same cell β sums and each particle's own drag at the current gas
+(``_cell_cuda.gas_forces``, the CPU's ``_exchange_kernels.gas_forces`` per particle). Per gas step only cell
+and face arrays cross between host and device: the gas fields go to the device, the deposited sums come back,
+and the host finishes them with the CPU's own kernels (``_voidage_kernels.finish_map``,
+``_paired_kernels._face_coefficients``, ``_face_voidage``). K_p stays on the device; ``fetch_kp`` brings it to
+the host for checkpoints and ``exchange_balance``.
 """
 from __future__ import annotations
 
@@ -24,13 +26,11 @@ from .voidage import SolidsMap
 def refusals(coupling, dimensions: int = 2) -> list[str]:
     """What in the coupling of a GPU engine keeps its particle side on the host, one line each (empty: the
     device exchange runs it). ``dimensions`` of the gas grid: in 3D both voidage methods ('centroid',
-    'volume') have device kernels (``exchange3d_gpu``), and every exchange ('cell', 'cell_beta':
-    ``_cell3d_cuda``)."""
+    'volume') have device kernels (``exchange3d_gpu``); every exchange ('particle', 'cell', 'cell_beta') has
+    them on both grids (``_cell_cuda``, ``_cell3d_cuda``)."""
     opts, out = coupling.options, []
     if opts.gpu_exchange == "host":
         out.append("coupling.gpu_exchange = 'host'")
-    if coupling.exchange not in ("particle", "cell") and dimensions == 2:
-        out.append(f"coupling.momentum_exchange = {coupling.exchange!r} (the device runs 'particle' and 'cell')")
     if dimensions == 2 and coupling.mapping.method not in ("centroid", "area", "area_volume"):
         out.append(f"coupling.voidage.method = {coupling.mapping.method!r} (the device maps 'centroid', 'area' and "
                    "'area_volume' on a 2D grid)")
@@ -92,6 +92,8 @@ class DeviceExchange:
         self._cellx = {k: cuda.device_array(gd.shape) for k in ("sum", "solids", "beta", "su", "sv")} \
             if coupling.exchange in ("cell", "cell_beta") else {}
         self.gas_law = cuda.to_device(np.ascontiguousarray(coupling._gas_law)) if self._cellx else None
+        # the "cell_beta" forces' wall-extended fields (host, device) and interpolation nodes (``set_gas_forces``)
+        self._fields = self._dev_fields = self._dev_nodes = None
 
     @staticmethod
     def _kernel_modules():
@@ -296,13 +298,56 @@ class DeviceExchange:
                                    bool(pressure), d["ext_force"], d["force"])
         self.engine.device_changed(("ext_force", "force"))
 
+    def set_gas_forces(self, pressure: bool) -> None:
+        """The "cell_beta" exchange's gas force on each particle at the current gas into the engine's ``ext_force``,
+        its total force following (``GasCoupling._gas_forces``): the wall-extended cell and face fields on the host
+        (``_exchange_kernels.gas_force_fields``), each particle's drag and −V_p ∇p on the device
+        (``_cell_cuda.gas_forces``). Raises ValueError where drag arguments are out of range (those forces NaN,
+        as on the host)."""
+        from . import _cell_cuda as CC
+        from . import _exchange_kernels as EK
+
+        if self.n == 0:
+            return
+        cp, gd, gs = self.coupling, self.coupling.grid, self.coupling.state
+        cp._check_gas()
+        nx, ny = gd.shape
+        f = self._fields = self._fields or {
+            "cen": np.empty((nx + 2, ny + 2, 2)), "xfa": np.zeros((nx + 1, ny + 2, 2)),
+            "yfa": np.zeros((nx + 2, ny + 1, 2)), "dbar": np.empty((nx + 2, ny + 2) if self._mixture else (0, 0))}
+        EK.gas_force_fields(gs.u, gs.v, gs.voidage, gs.rho, gs.p, cp._inv_dbar, float(gd.dx), float(gd.dy),
+                            bool(pressure), f["cen"], f["xfa"], f["yfa"], f["dbar"])
+        if self._dev_fields is None:
+            cuda = self._cuda
+            self._dev_fields = {k: cuda.device_array(a.shape) for k, a in f.items()}
+            self._dev_nodes = tuple(cuda.to_device(np.ascontiguousarray(a, dtype=float)) for a in cp._nodes)
+        g = self._dev_fields
+        for k, a in f.items():
+            if a.size:
+                g[k].copy_to_device(a)
+        self._zero_bad()
+        d = self.engine.device_arrays()
+        CC.gas_forces[self._blocks(CC.THREADS), CC.THREADS](
+            self.law, d["position"], d["velocity"], d["radius"], self._volume(), g["cen"], g["xfa"], g["yfa"],
+            g["dbar"], *self._dev_nodes, float(gd.dx), float(gd.dy), float(cp.solver.props.viscosity),
+            float(cp.mapping.minimum_voidage), bool(pressure), bool(self.engine.dim2), d["ext_force"], d["force"],
+            self.bad)
+        self.engine.device_changed(("ext_force", "force"))
+        bad = int(self.bad.copy_to_host()[0])
+        if bad:
+            raise ValueError(f"particle drag: arguments out of range for {bad} particles "
+                             "(voidage must lie in (0, 1], gas density > 0)")
+
     def _zero_bad(self) -> None:
         self.bad.copy_to_device(np.zeros(1, dtype=np.int32))
 
     def set_forces(self, split: bool, pressure: bool) -> None:
         """The gas force of this step's K_p on each particle into the engine's ``ext_force`` (and with ``split``
         its ``ext_damping``), the engine's total force following (``_paired_kernels.particle_forces_split`` or
-        ``particle_forces``)."""
+        ``particle_forces``); for the "cell_beta" exchange ``set_gas_forces``."""
+        if self.coupling.exchange == "cell_beta":
+            self.set_gas_forces(pressure)
+            return
         if self.n == 0:
             return
         cp, gd, gs = self.coupling, self.coupling.grid, self.coupling.state

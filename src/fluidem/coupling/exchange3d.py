@@ -134,7 +134,7 @@ class GasCoupling3D(GasCoupling):
     def cell_beta(self, voidage, solids_u, solids_v, solids_w=None):
         """β per cell [kg m^-3 s^-1], (nx, ny, nz): Σ_p β/(1 − ε)(ε, |u_c − v_s|, d_p) V_p / V_cell (Sun 2007 eq. 33,
         ``_exchange3d_kernels.cell_beta3d``); solids_w None: 0."""
-        gd, st, gs = self.grid, self._particles(), self.state
+        gd = self.grid
         if solids_w is None:
             solids_w = np.zeros(gd.shape)
         fields = [np.ascontiguousarray(a, dtype=float) for a in (voidage, solids_u, solids_v, solids_w)]
@@ -143,12 +143,18 @@ class GasCoupling3D(GasCoupling):
                              f"got {', '.join(str(f.shape) for f in fields)}")
         self._check_gas()
         beta = np.empty(gd.shape)
-        bad = X3.cell_beta3d(self._gas_law, st.position, st.radius, self.volume, gs.u, gs.v, gs.w, gs.rho, *fields,
-                             self.solver.props.viscosity, self._inv_dbar, gd.dx, gd.dy, gd.dz, gd.cell_volume, beta)
+        bad = self._cell_beta_sums(fields, beta)
         if bad:
             raise ValueError(f"cell β: drag arguments out of range for {bad} particles "
                              "(voidage must lie in (0, 1], gas density > 0)")
         return beta
+
+    def _cell_beta_sums(self, fields, beta) -> int:
+        """beta ← the cell β of ``cell_beta`` from the checked cell fields (ε, u_s, v_s, w_s); returns the number of
+        particles whose drag arguments are out of range."""
+        gd, st, gs = self.grid, self._particles(), self.state
+        return X3.cell_beta3d(self._gas_law, st.position, st.radius, self.volume, gs.u, gs.v, gs.w, gs.rho, *fields,
+                              self.solver.props.viscosity, self._inv_dbar, gd.dx, gd.dy, gd.dz, gd.cell_volume, beta)
 
     def _cell_coefficients(self, smap) -> tuple:
         """Stage 2 of "cell" and "cell_beta": (β, u_s, pressure voidage or None), β and u_s per face ("cell",

@@ -299,23 +299,10 @@ class DeviceGasCoupling3D(GasCoupling3D):
                              "(voidage must lie in (0, 1], gas density > 0)")
         return self._face_beta, self._face_solids
 
-    def cell_beta(self, voidage, solids_u, solids_v, solids_w=None):
+    def _cell_beta_sums(self, fields, beta) -> int:
         if self._device is None:
-            return super().cell_beta(voidage, solids_u, solids_v, solids_w)
-        gd = self.grid
-        if solids_w is None:
-            solids_w = np.zeros(gd.shape)
-        fields = [np.ascontiguousarray(a, dtype=float) for a in (voidage, solids_u, solids_v, solids_w)]
-        if any(f.shape != gd.shape for f in fields):
-            raise ValueError(f"voidage, solids_u, solids_v, solids_w must have shape {gd.shape}; "
-                             f"got {', '.join(str(f.shape) for f in fields)}")
-        self._check_gas()
-        beta = np.empty(gd.shape)
-        bad = self._device.cell_beta(*fields, beta)  # the particles' sums on the GPU
-        if bad:
-            raise ValueError(f"cell β: drag arguments out of range for {bad} particles "
-                             "(voidage must lie in (0, 1], gas density > 0)")
-        return beta
+            return super()._cell_beta_sums(fields, beta)
+        return self._device.cell_beta(*fields, beta)  # the particles' sums on the GPU
 
     def _cell_coefficients(self, smap) -> tuple:
         """``GasCoupling3D._cell_coefficients`` with the particles' sums on the device: the cell β (``cell_beta``)

@@ -372,6 +372,21 @@ def _bed(packing_case, n=216, two_species=False):
     return data, 3 * height
 
 
+def _device_and_host(data, gas_steps):
+    """The case ``data`` run for ``gas_steps`` gas steps on the GPU engine with the coupling's particle side on the
+    device and on the host: (device run, host run)."""
+    from fluidem import Simulation
+    from fluidem.case import validate_case
+
+    runs = {}
+    for mode in ("device", "host"):
+        data["coupling"]["gpu_exchange"] = mode
+        sim = Simulation(validate_case({**data, "device": "gpu"}))
+        sim.advance(gas_steps * sim.gas.substeps)
+        runs[mode] = sim
+    return runs["device"], runs["host"]
+
+
 def test_coupled3d_run_device_matches_host(packing_case):
     """The GPU engine on a 3D gas grid with the coupling's particle side on the device (exact-volume map, drag,
     deposit, gas force: ``coupling.exchange3d_gpu``) against the same run with it on the host
@@ -427,18 +442,9 @@ def test_coupled3d_polydisperse_device_matches_host(packing_case):
     """``polydisperse = "sauter_y2"`` on a 3D grid with the particle side on the device (1/D̄ of each cell from
     the device's sums, y = d/D̄ in the device's K_p) against the host: two gas steps of four sub-steps agree to
     round-off (the bounds of ``test_coupled3d_run_device_matches_host``)."""
-    from fluidem import Simulation
-    from fluidem.case import validate_case
-
     data, height = _bed(packing_case, n=125, two_species=True)
     data["coupling"]["polydisperse"] = "sauter_y2"
-    runs = {}
-    for mode in ("device", "host"):
-        data["coupling"]["gpu_exchange"] = mode
-        sim = Simulation(validate_case({**data, "device": "gpu"}))
-        sim.advance(2 * sim.gas.substeps)
-        runs[mode] = sim
-    dev, host = runs["device"], runs["host"]
+    dev, host = _device_and_host(data, 2)
     assert dev.gas._device is not None and host.gas._device is None and dev.gas.gas_steps == 2
     inv = host.gas._inv_dbar
     assert inv.shape == CELLS and 1 / 4e-3 < inv.max() <= 1 / 3.6e-3 * (1.0 + 1e-12)
@@ -461,18 +467,9 @@ def test_coupled3d_cell_exchange_device_matches_host(packing_case, exchange):
     "cell_beta" each particle's K_p evaluated at every sub-step: ``coupling._cell3d_cuda``) against the host
     (``gpu_exchange = "host"``): three gas steps of four sub-steps agree to round-off (the bounds of
     ``test_coupled3d_run_device_matches_host``), as do the cell β, the pressure voidage and ``exchange_balance``."""
-    from fluidem import Simulation
-    from fluidem.case import validate_case
-
     data, height = _bed(packing_case, n=125 if exchange == "cell" else 64)
     data["coupling"]["momentum_exchange"] = exchange
-    runs = {}
-    for mode in ("device", "host"):
-        data["coupling"]["gpu_exchange"] = mode
-        sim = Simulation(validate_case({**data, "device": "gpu"}))
-        sim.advance(3 * sim.gas.substeps)
-        runs[mode] = sim
-    dev, host = runs["device"], runs["host"]
+    dev, host = _device_and_host(data, 3)
     assert dev.gas._device is not None and host.gas._device is None and dev.gas.gas_steps == 3
     assert np.abs(dev.state.position - host.state.position).max() <= 1e-9 * height
     for a, b in ((dev.state.velocity, host.state.velocity), (dev.engine.ext_force, host.engine.ext_force)):

@@ -149,26 +149,6 @@ def _cap(h, r):
     return math.pi * (r - h) * (r - h) * (2.0 * r + h) / 3.0
 
 
-@njit(cache=True, inline="always")
-def _beyond(t, wx, wy, wz, wxy, wxz, wyz, wxyz, whole):
-    """Volume beyond the faces of the axes in t (bits 1 x, 2 y, 4 z) of ``_split_cells``."""
-    if t == 0:
-        return whole
-    if t == 1:
-        return wx
-    if t == 2:
-        return wy
-    if t == 4:
-        return wz
-    if t == 3:
-        return wxy
-    if t == 5:
-        return wxz
-    if t == 6:
-        return wyz
-    return wxyz
-
-
 @njit(cache=True)
 def _split_cells(af, bf, cf, hx, hy, hz, lx, ly, lz, ux, uy, uz, r, scale, work, f):
     """The cells of a sphere of radius r that has at most one face inside it per axis (``_volume_range``) and
@@ -190,6 +170,7 @@ def _split_cells(af, bf, cf, hx, hy, hz, lx, ly, lz, ux, uy, uz, r, scale, work,
     wxz = 2.0 * octant_volume(da, dc, 0.0, r) if hx and hz else 0.0
     wyz = 2.0 * octant_volume(db, dc, 0.0, r) if hy and hz else 0.0
     wxyz = octant_volume(da, db, dc, r) if hx and hy and hz else 0.0
+    beyond = (whole, wx, wy, wxy, wz, wxz, wyz, wxyz)  # W(t), t the bits 1 x, 2 y, 4 z
     faces = (1 if hx else 0) | (2 if hy else 0) | (4 if hz else 0)
     m = 0
     for h in range(8):
@@ -201,7 +182,7 @@ def _split_cells(af, bf, cf, hx, hy, hz, lx, ly, lz, ux, uy, uz, r, scale, work,
                 continue
             extra = (t ^ h)
             sign = -1.0 if ((extra & 1) + ((extra >> 1) & 1) + ((extra >> 2) & 1)) % 2 == 1 else 1.0
-            v += sign * _beyond(t, wx, wy, wz, wxy, wxz, wyz, wxyz, whole)
+            v += sign * beyond[t]
         if v > 0.0:
             # beyond a face at af ≥ 0 is the cell above it, beyond one at af < 0 the cell below
             i = lx if not hx else (ux if (h & 1 != 0) == (af >= 0.0) else lx)

@@ -79,6 +79,20 @@ def coupling3d_signatures(VC3, PC3, T) -> dict:
     }
 
 
+def cell3d_signatures(CC3, T) -> dict:
+    """{kernel: argument types} of the 3D "cell" and "cell_beta" exchanges' device kernels as
+    ``coupling.exchange3d_gpu`` launches them."""
+    f1, f2, f3, i1, b1 = T.float64[::1], T.float64[:, ::1], T.float64[:, :, ::1], T.int32[::1], T.boolean[::1]
+    b, f = T.boolean, T.float64
+    return {
+        CC3.cell_beta_deposit3d: (f1, f2, f1, f1) + (f3,) * 8 + (f, f3, f, f, f, f3, i1),
+        CC3.pressure_deposit3d: (f2, f1, f, f, f, b, b, b, f3, f3, f3),
+        CC3.cell_solids3d: (f2, f1, f, f, f, f3),
+        CC3.cell_forces3d: (f2, f1) + (f3,) * 9 + (f,) * 4 + (b,) * 4 + (f2, f2),
+        CC3.kp_now3d: (f1, f2, f2, f1, f1) + (f3,) * 5 + (f, f3) + (f,) * 4 + (b,) * 4 + (f1, b1, i1),
+    }
+
+
 def main(cc=(9, 0)) -> int:
     import numba.cuda.dispatcher as dispatcher
     from numba import cuda
@@ -93,9 +107,11 @@ def main(cc=(9, 0)) -> int:
     from fluidem.coupling import _paired3d_cuda as PC3
     from fluidem.coupling import _voidage3d_cuda as VC3
     from fluidem.coupling import _cell_cuda as CC
+    from fluidem.coupling import _cell3d_cuda as CC3
 
     for kernel, sig in {**kernel_signatures(SC, NC, T), **coupling_signatures(VC, PC, T),
-                        **coupling3d_signatures(VC3, PC3, T), **cell_signatures(CC, T)}.items():
+                        **coupling3d_signatures(VC3, PC3, T), **cell_signatures(CC, T),
+                        **cell3d_signatures(CC3, T)}.items():
         ptx, _ = cuda.compile_ptx(kernel.py_func, sig, cc=cc)
         print(f"{kernel.py_func.__name__}: {len(ptx)} characters of PTX for sm_{cc[0]}{cc[1]}")
     return 0

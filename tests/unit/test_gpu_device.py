@@ -105,7 +105,7 @@ def test_gpu_kernels_compile_to_ptx():
     r = subprocess.run([sys.executable, str(ROOT / "tests" / "_helpers" / "gpu_ptx.py"), "9", "0"], env=env,
                        capture_output=True, text=True, timeout=SIMULATOR_TIMEOUT)
     assert r.returncode == 0, (r.stdout + r.stderr)[-3000:]
-    assert r.stdout.count("characters of PTX") == 27, r.stdout  # 8 of the particle step, 7 + 5 + 7 of the coupling
+    assert r.stdout.count("characters of PTX") == 32, r.stdout  # 8 of the particle step, 7 + 7 + 5 + 5 of the coupling
 
 
 def test_contact_physics_the_gpu_path_lacks_is_refused_by_name():

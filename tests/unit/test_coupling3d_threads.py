@@ -411,9 +411,14 @@ def test_volume_and_centroid_sums_in_any_number_of_slabs(periodic):
     for m in slab_partitions(nx):
         out = [np.zeros(CELLS) for _ in range(4)]
         cout = [np.zeros(CELLS) for _ in range(4)]
+        bit = VK3.slab_bits(m, nx)
+        slabs = np.empty(N, np.int64)
+        VK3._volume_slabs(0, N, pos, r, SPACING[0], nx, periodic[0], bit, slabs)
+        single = (slabs & (slabs - 1)) == 0  # all its cells in one slab
+        assert single.all() == (m == 1) and (single.any() or m > 2), m
         for s in range(m):
             lo, hi = VK3.slab_bounds(s, m, nx)
-            VK3._volume_add(lo, hi, pos, r, scale, vel, *SPACING, *periodic, nodes, stride, work, *out)
+            VK3._volume_add(lo, hi, bit[lo], slabs, pos, r, scale, vel, *SPACING, *periodic, nodes, stride, work, *out)
             VK3._centroid_add(lo, hi, N, w, vel, cells, *cout)
         for a in range(4):
             assert np.array_equal(out[a], ref[a]), (m, a)
@@ -423,9 +428,10 @@ def test_volume_and_centroid_sums_in_any_number_of_slabs(periodic):
 @pytest.mark.parametrize("periodic", PERIODIC)
 @pytest.mark.parametrize("pair", [True, False])
 def test_face_sums_in_any_number_of_slabs(periodic, pair):
-    """The slab passes of the face deposit (``_paired3d_kernels._face_sums``), one after the other for 1, 2, 3
-    and one slab per x plane, == the sums in particle order, with a tenth of the particles out of drag range
-    (V_p deposited, no K_p); face nx (walls) in the last slab, wrapped faces (periodic) in the first."""
+    """The slab passes of the face deposit (``_paired3d_kernels._face_sums_slab`` with each particle's slabs of
+    ``_face_slabs``), one after the other for 1, 2, 3 and one slab per x plane, == the sums in particle order,
+    with a tenth of the particles out of drag range (V_p deposited, no K_p); face nx (walls) in the last slab,
+    wrapped faces (periodic) in the first; particles inside one slab and straddling two both present."""
     pos, r, vel = packing(seed=13)
     size = np.array(CELLS) * np.array(SPACING)
     pos = np.ascontiguousarray(np.clip(pos, 0.0, size))
@@ -442,15 +448,28 @@ def test_face_sums_in_any_number_of_slabs(periodic, pair):
             AB = [np.zeros(s) for s in shapes for _ in range(2)]
             KC = np.zeros(CELLS)
             E = [np.zeros(s) for s in shapes]
+            slabs = np.empty(N, np.int64)
+            bit = VK3.slab_bits(m, nx)
+            P3._face_slabs(0, N, pos, ok, inv[0], nx, periodic[0], fold, pair, bit, slabs)
+            single = (slabs & (slabs - 1)) == 0  # one bit: the particle's nodes all in one slab
+            assert single.all() == (m == 1) and (single.any() or m > 2), m
             for s in range(m):
                 lo, hi = VK3.slab_bounds(s, m, nx)
-                P3._face_sums(lo, hi, pos, vel, vol, kp, ok, *inv, *periodic, fold, pair, *AB, KC, *E)
+                P3._face_sums_slab(s, lo, hi, slabs, pos, vel, vol, kp, ok, *inv, *periodic, fold, pair, *AB, KC, *E)
             assert np.array_equal(KC, KC_ref), (fold, m)
             for a in range(3):
                 assert np.array_equal(AB[2 * a], A[a]) and np.array_equal(AB[2 * a + 1], B[a]), (fold, m, a)
                 assert np.array_equal(E[a], E_ref[a] if pair else np.zeros(shapes[a])), (fold, m, a)
             if not periodic[0] and not fold:
                 assert A[0][nx].any()  # the wall face nx, held by the last slab
+
+
+def test_slab_of_is_the_slab_whose_bounds_hold_the_index():
+    for nx in (1, 2, 5, 15, 64):
+        for m in range(1, min(nx, 63) + 1):
+            for s in range(m):
+                lo, hi = VK3.slab_bounds(s, m, nx)
+                assert all(VK3.slab_of(i, m, nx) == s for i in range(lo, hi)), (nx, m, s)
 
 
 def test_volume_deposit_without_velocity_sums():

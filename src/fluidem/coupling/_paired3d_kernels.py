@@ -24,10 +24,12 @@ of ``CHUNK`` particles on Numba's threads (``prange``); ``deposit3d`` then adds 
 particle order (recomputing the weights there: on ``bubbling-3d`` that took half the time of keeping them in
 a scratch array and reading them back), on all threads too: the grid is split along x into one slab of
 whole yz planes per thread (``_voidage3d_kernels.slab_count``, ``slab_bounds``: cells and faces of x index
-lo … hi − 1, the face nx in the last slab), and each slab walks all particles in particle order, skips a
-particle none of whose x nodes (centres, faces, ∇p faces, centre cell) lies in it, and adds only the terms
-whose x node does (``_face_sums``). Every face and cell then receives the same numbers, in the same order, as
-in one serial pass, so the results are bitwise the same for any number of threads; at most ``CHUNK``
+lo … hi − 1, the face nx in the last slab). A first pass over the particles (in chunks) marks the slabs of
+each particle's x nodes (centres, faces, ∇p faces, centre cell) as the bits of one integer (``_face_slabs``);
+then each slab walks the particles in particle order, skips those not marked for it, adds all the terms of a
+particle marked for it alone and, of one that straddles two slabs, the terms whose x node lies in it
+(``_face_sums_slab``). Every face and cell then receives the same numbers, in the same order, as in one
+serial pass, so the results are bitwise the same for any number of threads; at most ``CHUNK``
 particles, or one thread, take the one serial pass.
 """
 import math
@@ -37,7 +39,7 @@ from numba import njit, prange
 
 from ._exchange_kernels import _drag_arguments_valid, store_force
 from ._paired_kernels import CHUNK, _centre_axis, _face_axis
-from ._voidage3d_kernels import slab_bounds, slab_count
+from ._voidage3d_kernels import slab_bits, slab_bounds, slab_count
 from .drag._dispatch import beta_per_solids
 
 
@@ -308,55 +310,27 @@ def _voidage_of(E, VF, min_voidage):
 
 
 @njit(cache=True, error_model="numpy")
-def _face_sums(lo, hi, position, velocity, volume, kp, ok, idx, idy, idz, px, py, pz, fold, pair, AU, BU, AV, BV, AW,
-               BW, KC, EU, EV, EW):
-    """The face and cell sums of ``deposit3d`` (accumulated into) at the x indices [lo, hi) of cells and faces, in
-    particle order: A_f += w_pf K_p, B_f += w_pf K_p v_p, KC += K_p of the centre's cell and, with ``pair``,
-    E_f += w_pf V_p (∇p weights, boundary faces folded). [0, nx + 1) is the whole serial pass."""
-    nx, ny, nz = KC.shape
-    for q in range(position.shape[0]):
+def _face_slabs(lo, hi, position, ok, idx, nx, px, fold, pair, bit, slabs):
+    """slabs[q] for q in [lo, hi): the bits ``bit[i]`` (1 << the slab of x index i, ``slab_of``) of the x nodes of
+    particle q that ``_face_sums_serial`` adds to (centres, faces, ∇p faces, centre cell), OR-ed."""
+    for q in range(lo, hi):
         x = position[q, 0]
-        ci0, ci1, cwx0, cwx1, fi0, fi1, fwx0, fwx1 = _axis(x, idx, nx, px, fold)
-        gi0, gi1, gwx0, gwx1 = _face_axis(x, idx, nx, px, True)
-        ic = min(max(int(x * idx), 0), nx - 1)
-        good = ok[q]
-        touch = lo <= ci0 < hi or lo <= ci1 < hi
-        if good:
-            touch = touch or lo <= fi0 < hi or lo <= fi1 < hi or lo <= ic < hi
+        ci0, ci1, _, _, fi0, fi1, _, _ = _axis(x, idx, nx, px, fold)
+        b = bit[ci0] | bit[ci1]
+        if ok[q]:
+            b |= bit[fi0] | bit[fi1] | bit[min(max(int(x * idx), 0), nx - 1)]
         if pair:
-            touch = touch or lo <= gi0 < hi or lo <= gi1 < hi
-        if not touch:
-            continue
-        y, z = position[q, 1], position[q, 2]
-        cj0, cj1, cwy0, cwy1, fj0, fj1, fwy0, fwy1 = _axis(y, idy, ny, py, fold)
-        ck0, ck1, cwz0, cwz1, fk0, fk1, fwz0, fwz1 = _axis(z, idz, nz, pz, fold)
-        if pair:  # V_p on the faces of its ∇p interpolation (always folded)
-            gj0, gj1, gwy0, gwy1 = _face_axis(y, idy, ny, py, True)
-            gk0, gk1, gwz0, gwz1 = _face_axis(z, idz, nz, pz, True)
-            vq = volume[q]
-            _add3_slab(EU, gi0, gi1, gwx0, gwx1, cj0, cj1, cwy0, cwy1, ck0, ck1, cwz0, cwz1, vq, lo, hi)
-            _add3_slab(EV, ci0, ci1, cwx0, cwx1, gj0, gj1, gwy0, gwy1, ck0, ck1, cwz0, cwz1, vq, lo, hi)
-            _add3_slab(EW, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, gk0, gk1, gwz0, gwz1, vq, lo, hi)
-        if not good:
-            continue
-        k = kp[q]
-        if lo <= ic < hi:
-            jc = min(max(int(y * idy), 0), ny - 1)
-            kc = min(max(int(z * idz), 0), nz - 1)
-            KC[ic, jc, kc] += k
-        _add3_slab(AU, fi0, fi1, fwx0, fwx1, cj0, cj1, cwy0, cwy1, ck0, ck1, cwz0, cwz1, k, lo, hi)
-        _add3_slab(BU, fi0, fi1, fwx0, fwx1, cj0, cj1, cwy0, cwy1, ck0, ck1, cwz0, cwz1, k * velocity[q, 0], lo, hi)
-        _add3_slab(AV, ci0, ci1, cwx0, cwx1, fj0, fj1, fwy0, fwy1, ck0, ck1, cwz0, cwz1, k, lo, hi)
-        _add3_slab(BV, ci0, ci1, cwx0, cwx1, fj0, fj1, fwy0, fwy1, ck0, ck1, cwz0, cwz1, k * velocity[q, 1], lo, hi)
-        _add3_slab(AW, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, fk0, fk1, fwz0, fwz1, k, lo, hi)
-        _add3_slab(BW, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, fk0, fk1, fwz0, fwz1, k * velocity[q, 2], lo, hi)
+            gi0, gi1, _, _ = _face_axis(x, idx, nx, px, True)
+            b |= bit[gi0] | bit[gi1]
+        slabs[q] = b
 
 
 @njit(cache=True, error_model="numpy")
 def _face_sums_serial(position, velocity, volume, kp, ok, idx, idy, idz, px, py, pz, fold, pair, AU, BU, AV, BV, AW,
                       BW, KC, EU, EV, EW):
-    """``_face_sums`` over all of x in one pass, without the slab tests (which cost the one-thread deposit
-    0.1–0.2 ms a gas step on ``bubbling-3d``): the serial pass of one thread and of at most ``CHUNK`` particles."""
+    """The face and cell sums of ``deposit3d`` (accumulated into), in particle order: A_f += w_pf K_p,
+    B_f += w_pf K_p v_p, KC += K_p of the centre's cell and, with ``pair``, E_f += w_pf V_p (∇p weights, boundary
+    faces folded). The one pass of one thread, or of at most ``CHUNK`` particles."""
     nx, ny, nz = KC.shape
     for q in range(position.shape[0]):
         x, y, z = position[q, 0], position[q, 1], position[q, 2]
@@ -386,16 +360,76 @@ def _face_sums_serial(position, velocity, volume, kp, ok, idx, idy, idz, px, py,
         _add3(BW, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, fk0, fk1, fwz0, fwz1, k * velocity[q, 2])
 
 
+@njit(cache=True, error_model="numpy")
+def _face_sums_slab(s, lo, hi, slabs, position, velocity, volume, kp, ok, idx, idy, idz, px, py, pz, fold, pair, AU,
+                    BU, AV, BV, AW, BW, KC, EU, EV, EW):
+    """The sums of ``_face_sums_serial`` onto the x nodes [lo, hi) of slab s, in particle order: the particles
+    whose slabs (``_face_slabs``) include s, each term whose x node lies in the slab (all of them where the
+    particle's nodes lie in s alone). Every node receives the terms of the serial pass, in the same order."""
+    nx, ny, nz = KC.shape
+    own = np.int64(1) << s  # slab_bits of its x indices
+    for q in range(position.shape[0]):
+        b = slabs[q]
+        if b & own == 0:
+            continue
+        whole = b == own
+        x, y, z = position[q, 0], position[q, 1], position[q, 2]
+        ci0, ci1, cwx0, cwx1, fi0, fi1, fwx0, fwx1 = _axis(x, idx, nx, px, fold)
+        cj0, cj1, cwy0, cwy1, fj0, fj1, fwy0, fwy1 = _axis(y, idy, ny, py, fold)
+        ck0, ck1, cwz0, cwz1, fk0, fk1, fwz0, fwz1 = _axis(z, idz, nz, pz, fold)
+        if pair:
+            gi0, gi1, gwx0, gwx1 = _face_axis(x, idx, nx, px, True)
+            gj0, gj1, gwy0, gwy1 = _face_axis(y, idy, ny, py, True)
+            gk0, gk1, gwz0, gwz1 = _face_axis(z, idz, nz, pz, True)
+            vq = volume[q]
+            if whole:  # no tests: they cost as much as the adds
+                _add3(EU, gi0, gi1, gwx0, gwx1, cj0, cj1, cwy0, cwy1, ck0, ck1, cwz0, cwz1, vq)
+                _add3(EV, ci0, ci1, cwx0, cwx1, gj0, gj1, gwy0, gwy1, ck0, ck1, cwz0, cwz1, vq)
+                _add3(EW, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, gk0, gk1, gwz0, gwz1, vq)
+            else:
+                _add3_slab(EU, gi0, gi1, gwx0, gwx1, cj0, cj1, cwy0, cwy1, ck0, ck1, cwz0, cwz1, vq, lo, hi)
+                _add3_slab(EV, ci0, ci1, cwx0, cwx1, gj0, gj1, gwy0, gwy1, ck0, ck1, cwz0, cwz1, vq, lo, hi)
+                _add3_slab(EW, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, gk0, gk1, gwz0, gwz1, vq, lo, hi)
+        if not ok[q]:
+            continue
+        k = kp[q]
+        ic = min(max(int(x * idx), 0), nx - 1)
+        if whole or lo <= ic < hi:
+            jc = min(max(int(y * idy), 0), ny - 1)
+            kc = min(max(int(z * idz), 0), nz - 1)
+            KC[ic, jc, kc] += k
+        if whole:
+            _add3(AU, fi0, fi1, fwx0, fwx1, cj0, cj1, cwy0, cwy1, ck0, ck1, cwz0, cwz1, k)
+            _add3(BU, fi0, fi1, fwx0, fwx1, cj0, cj1, cwy0, cwy1, ck0, ck1, cwz0, cwz1, k * velocity[q, 0])
+            _add3(AV, ci0, ci1, cwx0, cwx1, fj0, fj1, fwy0, fwy1, ck0, ck1, cwz0, cwz1, k)
+            _add3(BV, ci0, ci1, cwx0, cwx1, fj0, fj1, fwy0, fwy1, ck0, ck1, cwz0, cwz1, k * velocity[q, 1])
+            _add3(AW, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, fk0, fk1, fwz0, fwz1, k)
+            _add3(BW, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, fk0, fk1, fwz0, fwz1, k * velocity[q, 2])
+        else:
+            _add3_slab(AU, fi0, fi1, fwx0, fwx1, cj0, cj1, cwy0, cwy1, ck0, ck1, cwz0, cwz1, k, lo, hi)
+            _add3_slab(BU, fi0, fi1, fwx0, fwx1, cj0, cj1, cwy0, cwy1, ck0, ck1, cwz0, cwz1, k * velocity[q, 0], lo, hi)
+            _add3_slab(AV, ci0, ci1, cwx0, cwx1, fj0, fj1, fwy0, fwy1, ck0, ck1, cwz0, cwz1, k, lo, hi)
+            _add3_slab(BV, ci0, ci1, cwx0, cwx1, fj0, fj1, fwy0, fwy1, ck0, ck1, cwz0, cwz1, k * velocity[q, 1], lo, hi)
+            _add3_slab(AW, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, fk0, fk1, fwz0, fwz1, k, lo, hi)
+            _add3_slab(BW, ci0, ci1, cwx0, cwx1, cj0, cj1, cwy0, cwy1, fk0, fk1, fwz0, fwz1, k * velocity[q, 2], lo, hi)
+
+
 @njit(cache=True, error_model="numpy", parallel=True)
 def _face_sums_parallel(position, velocity, volume, kp, ok, idx, idy, idz, px, py, pz, fold, pair, AU, BU, AV, BV,
                         AW, BW, KC, EU, EV, EW):
-    """``_face_sums`` of each x slab (``_voidage3d_kernels.slab_count``, ``slab_bounds``) on all threads."""
+    """``_face_sums_serial`` on all threads: each particle's slabs (``_face_slabs``, in chunks of ``CHUNK``), then
+    the sums of each x slab (``_voidage3d_kernels.slab_count``, ``slab_bounds``; ``_face_sums_slab``)."""
     nx = KC.shape[0]
     m = slab_count(nx)
+    n = position.shape[0]
+    bit = slab_bits(m, nx)
+    slabs = np.empty(n, np.int64)
+    for c in prange((n + CHUNK - 1) // CHUNK):
+        _face_slabs(c * CHUNK, min(n, (c + 1) * CHUNK), position, ok, idx, nx, px, fold, pair, bit, slabs)
     for s in prange(m):
         lo, hi = slab_bounds(s, m, nx)
-        _face_sums(lo, hi, position, velocity, volume, kp, ok, idx, idy, idz, px, py, pz, fold, pair, AU, BU, AV, BV,
-                   AW, BW, KC, EU, EV, EW)
+        _face_sums_slab(s, lo, hi, slabs, position, velocity, volume, kp, ok, idx, idy, idz, px, py, pz, fold, pair,
+                        AU, BU, AV, BV, AW, BW, KC, EU, EV, EW)
 
 
 @njit(cache=True, error_model="numpy")

@@ -33,10 +33,11 @@ node values and each cell's volume; for the centroid map each particle's cell) i
 ``CHUNK`` particles on Numba's threads (``prange``), into a scratch array ``work``. The sums onto the grid
 follow in particle order, on all threads too: the grid is split along x (its first index, so that each part is
 one contiguous block of every grid array) into one slab of whole yz planes per thread (``slab_count``,
-``slab_bounds``), and each slab walks all particles in particle order and adds only the cells whose wrapped x
-index lies in it (``_volume_add``). Every cell then receives the same numbers, in the same order, as in one serial pass over
-all particles, so the maps are bitwise the same for any number of threads. At most ``CHUNK`` particles, or
-one thread, take the one serial pass.
+``slab_bounds``); each sphere's slabs are marked first, as the bits of one integer (``_volume_slabs``), and
+each slab walks the particles in particle order, skips those not marked for it and adds the cells whose
+wrapped x index lies in it (``_volume_add``). Every cell then receives the same numbers, in the same order, as
+in one serial pass over all particles, so the maps are bitwise the same for any number of threads. At most
+``CHUNK`` particles, or one thread, take the one serial pass.
 """
 import math
 
@@ -370,10 +371,10 @@ def _volume_parallel(position, radius, scale, dx, dy, dz, nx, ny, nz, px, py, pz
 
 @njit(cache=True, inline="always")
 def slab_count(nx):
-    """Number of x slabs of the parallel grid sums: one per thread (Numba's ``get_num_threads``), at most nx.
-    Called only in kernels that call a ``parallel=True`` one too, which starts Numba's threads when it is
-    loaded from the cache."""
-    return max(1, min(_num_threads(), nx))
+    """Number of x slabs of the parallel grid sums: one per thread (Numba's ``get_num_threads``), at most nx and
+    at most 63 (a particle's slabs are the bits of one int64, ``slab_of``). Called only in kernels that call a
+    ``parallel=True`` one too, which starts Numba's threads when it is loaded from the cache."""
+    return max(1, min(_num_threads(), nx, 63))
 
 
 @njit(cache=True, inline="always")
@@ -388,33 +389,52 @@ def slab_bounds(s, m, nx):
 
 
 @njit(cache=True, inline="always")
-def _x_range_meets(x, r, dx, nx, px, lo, hi):
-    """Whether a wrapped x index of the cells [a0, a1] of ``_cell_range`` (those ``_volume_range`` and
-    ``_volume_add`` take for a sphere at x of radius r) lies in [lo, hi)."""
-    a0, a1 = _cell_range(x, r, dx, nx, px)
-    if a1 - a0 + 1 >= nx:
-        return True
-    w0 = a0 % nx
-    w1 = a1 % nx
-    if w0 <= w1:
-        return w0 < hi and w1 >= lo
-    return w0 < hi or w1 >= lo  # [w0, nx − 1] and [0, w1]
+def slab_of(i, m, nx):
+    """The slab of ``slab_bounds`` (of m) that holds x index i (0 … nx): the largest s with (s nx) // m <= i."""
+    return min(m - 1, ((i + 1) * m - 1) // nx)
 
 
 @njit(cache=True)
-def _volume_add(lo, hi, position, radius, scale, velocity, dx, dy, dz, px, py, pz, nodes, stride, work, out, ovx,
-                ovy, ovz):
-    """The sums of ``volume_deposit`` onto the cells whose (wrapped) x index lies in [lo, hi): the cells of
-    ``_volume_range`` added in particle order (a sphere with the count −1 by ``sphere_box_volume`` of each
-    cell, as the deposit was before node values); a sphere whose x cell range misses the slab is skipped from
-    its position (``_x_range_meets``). [0, nx) is the whole serial pass. ovx, ovy, ovz of size 0: the volumes
-    only."""
+def slab_bits(m, nx):
+    """(nx + 1,) int64: 1 << the slab (of m, ``slab_of``) of each x index 0 … nx."""
+    bit = np.empty(nx + 1, np.int64)
+    for i in range(nx + 1):
+        bit[i] = np.int64(1) << slab_of(i, m, nx)
+    return bit
+
+
+@njit(cache=True)
+def _volume_slabs(lo, hi, position, radius, dx, nx, px, bit, slabs):
+    """slabs[p] for p in [lo, hi): the bits ``bit[i]`` (``slab_bits``) of the wrapped x indices of the cells of
+    ``_cell_range``, which ``_volume_range`` and ``_volume_add`` take for the sphere of p, OR-ed."""
+    for p in range(lo, hi):
+        a0, a1 = _cell_range(position[p, 0], radius[p], dx, nx, px)
+        if a1 - a0 + 1 >= nx:
+            a0, a1 = 0, nx - 1
+        b = np.int64(0)
+        for i in range(a0, a1 + 1):
+            b |= bit[i % nx]
+        slabs[p] = b
+
+
+@njit(cache=True)
+def _volume_add(lo, hi, own, slabs, position, radius, scale, velocity, dx, dy, dz, px, py, pz, nodes, stride, work,
+                out, ovx, ovy, ovz):
+    """The sums of ``volume_deposit`` onto the cells whose (wrapped) x index lies in [lo, hi), slab ``own`` (its
+    bit) of the particles' slabs ``slabs`` (``_volume_slabs``): the cells of ``_volume_range`` added in particle
+    order (a sphere with the count −1 by ``sphere_box_volume`` of each cell, as the deposit was before node
+    values); a sphere none of whose cells lies in the slab is skipped, one whose cells all lie in it adds them
+    without a test. ``slabs`` of size 0: the whole serial pass. ovx, ovy, ovz of size 0: the volumes only."""
     nx, ny, nz = out.shape
-    whole = lo <= 0 and hi >= nx
+    every = slabs.shape[0] == 0
     weigh = ovx.shape[0] > 0  # the velocity sums too
     for p in range(position.shape[0]):
-        if not whole and not _x_range_meets(position[p, 0], radius[p], dx, nx, px, lo, hi):
-            continue  # none of its cells in the slab: its scratch is not read
+        whole = every
+        if not every:
+            b = slabs[p]
+            if b & own == 0:
+                continue  # none of its cells in the slab: its scratch is not read
+            whole = b == own
         e = p * stride + nodes
         m = int(work[e])
         vx = velocity[p, 0]
@@ -424,7 +444,7 @@ def _volume_add(lo, hi, position, radius, scale, velocity, dx, dy, dz, px, py, p
             for q in range(m):
                 f = e + 1 + 4 * q
                 i = int(work[f])
-                if i < lo or i >= hi:
+                if not whole and (i < lo or i >= hi):
                     continue
                 j = int(work[f + 1])
                 k = int(work[f + 2])
@@ -444,7 +464,7 @@ def _volume_add(lo, hi, position, radius, scale, velocity, dx, dy, dz, px, py, p
         c0, c1 = _cell_range(z, r, dz, nz, pz)
         for i in range(a0, a1 + 1):
             ii = i % nx
-            if ii < lo or ii >= hi:
+            if not whole and (ii < lo or ii >= hi):
                 continue
             xl, xh = _bounds(i, dx, nx, px)
             for j in range(b0, b1 + 1):
@@ -465,13 +485,19 @@ def _volume_add(lo, hi, position, radius, scale, velocity, dx, dy, dz, px, py, p
 @njit(cache=True, parallel=True)
 def _volume_add_parallel(position, radius, scale, velocity, dx, dy, dz, px, py, pz, nodes, stride, work, out, ovx,
                          ovy, ovz):
-    """``_volume_add`` of each x slab (``slab_count``, ``slab_bounds``) on all threads."""
+    """``_volume_add`` of each x slab (``slab_count``, ``slab_bounds``) on all threads, after each sphere's slabs
+    (``_volume_slabs``, in chunks of ``CHUNK``)."""
     nx = out.shape[0]
     m = slab_count(nx)
+    n = position.shape[0]
+    bit = slab_bits(m, nx)
+    slabs = np.empty(n, np.int64)
+    for c in prange((n + CHUNK - 1) // CHUNK):
+        _volume_slabs(c * CHUNK, min(n, (c + 1) * CHUNK), position, radius, dx, nx, px, bit, slabs)
     for s in prange(m):
         lo, hi = slab_bounds(s, m, nx)
-        _volume_add(lo, hi, position, radius, scale, velocity, dx, dy, dz, px, py, pz, nodes, stride, work, out, ovx,
-                    ovy, ovz)
+        _volume_add(lo, hi, bit[lo], slabs, position, radius, scale, velocity, dx, dy, dz, px, py, pz, nodes, stride,
+                    work, out, ovx, ovy, ovz)
 
 
 @njit(cache=True)
@@ -498,8 +524,8 @@ def volume_deposit(position, radius, scale, velocity, dx, dy, dz, px, py, pz, ou
         _volume_add_parallel(position, radius, scale, velocity, dx, dy, dz, px, py, pz, nodes, stride, buf, out, ovx,
                              ovy, ovz)
     else:
-        _volume_add(0, nx, position, radius, scale, velocity, dx, dy, dz, px, py, pz, nodes, stride, buf, out, ovx,
-                    ovy, ovz)
+        _volume_add(0, nx, np.int64(1), np.empty(0, np.int64), position, radius, scale, velocity, dx, dy, dz, px, py,
+                    pz, nodes, stride, buf, out, ovx, ovy, ovz)
 
 
 @njit(cache=True)

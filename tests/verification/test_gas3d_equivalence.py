@@ -128,3 +128,25 @@ def test_the_multigrid_gives_the_2d_fields_to_the_solver_tolerance(thin):
     assert np.abs(st3.p - to_3d(st2.p, axes, thin)).max() < 2e-7  # [Pa] of 1e5
     assert np.abs(velocity[axes[0]] - to_3d(st2.u, axes, thin)).max() < 3e-9  # [m/s] of 8
     assert np.abs(velocity[axes[1]] - to_3d(st2.v, axes, thin)).max() < 3e-9
+
+
+def test_the_multigrid_gives_way_to_superlu_when_gmres_stalls():
+    """One GMRES iteration a correction cannot reach its target: the first step goes on with SuperLU from the
+    iteration where GMRES stalled, converges, and the run gives the fields of a SuperLU run to the solver
+    tolerance (bounds of the multigrid test above)."""
+    props = GasProperties()
+    runs = []
+    for linear_solver in ("multigrid", "superlu"):
+        s3, axes = three_d(props, "upwind", 2, linear_solver=linear_solver)
+        s3.krylov_max = 1
+        assert s3.linear_solver == linear_solver
+        _, Y, _ = s3.grid.centres()
+        st = s3.initial_state(voidage=np.where(Y < 0.08, 0.45, 1.0))
+        for k in range(5):
+            info = s3.advance(st, 2e-4, k * 2e-4, beta=np.where(Y < 0.08, 3000.0, 0.0))
+            assert info.converged
+        assert s3.linear_solver == "superlu"
+        runs.append(st)
+    assert np.abs(runs[0].p - runs[1].p).max() < 2e-7  # [Pa]
+    for a in "uvw":
+        assert np.abs(getattr(runs[0], a) - getattr(runs[1], a)).max() < 3e-9  # [m/s]

@@ -23,7 +23,7 @@ indexed by their face lines along a and b and their cell along c.
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import literal_unroll, njit, prange
 
 from ._layout3d import (
     C_E,
@@ -75,12 +75,15 @@ from ._layout3d import (
     RULE_P,
     SOLVED,
 )
+from ._multigrid3d_kernels import gmres, mg_setup
 from ._operators import face_value
 from ._solver_kernels import (  # ghost velocities per flag, shared with 2D
     _normal,
     _tangential,
 )
 from .grid import PERIODIC
+
+AXES = (0, 1, 2)  # literal_unroll(AXES): a loop over the axes compiled once per axis
 
 MASS_FLOOR = 1e-4  # share of (gas mass / dt) in the reference flow of the mass residual (as in 2D)
 
@@ -383,7 +386,7 @@ def _stress_threads(W, E, mu, hx, hy, hz, S, T, nx, ny, nz):
 def _stress_planes(i0, i1, W, E, mu, hx, hy, hz, S, T, nx, ny, nz):
     """``stresses`` at the points with x index i0 <= i < i1 (normal stresses from −1, edges from 0)."""
     ihx, ihy, ihz = 1.0 / hx, 1.0 / hy, 1.0 / hz
-    for d in range(3):
+    for d in literal_unroll(AXES):  # one compiled loop per axis: the index tuples of at() fold
         ex, ey, ez = unit(d)
         for i in range(max(i0, -ex), min(i1, nx + ex)):
             for j in range(-ey, ny + ey):
@@ -396,7 +399,7 @@ def _stress_planes(i0, i1, W, E, mu, hx, hy, hz, S, T, nx, ny, nz):
                     S[d, i + 1, j + 1, k + 1] = E[i + 1, j + 1, k + 1] * mu * (2.0 * own - third)
     N = (nx, ny, nz)
     ih = (ihx, ihy, ihz)
-    for c in range(3):
+    for c in literal_unroll(AXES):
         a, b = (c + 1) % 3, (c + 2) % 3
         # the x index of the edge (pc, pa, pb) is pc (c = 0), pb (c = 1) or pa (c = 2)
         x0, x1 = max(i0, 0), min(i1, nx + (c != 0))
@@ -988,3 +991,38 @@ def correct_pressure(C, dp, flags, RULES, fpar, ipar):
         _correction_planes(0, nx, C, dp, ny, nz)
     fill_centre_ghosts(P, flags, RULES[RULE_P], C[C_PFIX], nx, ny, nz)
     update_density(C, fpar[FP_COMP], fpar[FP_RHOC], fpar[FP_PREF], threads)
+
+
+@njit(cache=True, error_model="numpy")
+def newton_multigrid(W, C, F, K, row_of, R, fpar, ipar, out, data, diag_pos, pos, pin_pos, flags, RULES, ell, MGL, MGI,
+                     MGA, MGS, MGW, DLU, PIV, KRY, HES, rhs, dp, pinned, tolerance, max_iterations, reduction,
+                     floor_factor, krylov_max, counts):
+    """The Newton iterations of a gas step on the multigrid path, in one compiled call: the continuity residual
+    (``predict_residual``) until it is at most ``tolerance`` (or not finite, or after ``max_iterations``), each
+    iteration solving J p' = −R with the Jacobian assembled (``assemble_pressure``), a new hierarchy
+    (``_multigrid3d_kernels.mg_setup``) and GMRES to max(``reduction`` ‖R‖₂, ``floor_factor`` × the reference
+    flow / √n), then ``correct_pressure``. ``pinned``: row 0 is the pressure level's (its right-hand side 0).
+    ``counts`` [hierarchies, GMRES iterations] are added to. Returns (iterations, mass residual, failed):
+    ``failed`` where the hierarchy could not be made or GMRES stalled in the iteration reached, whose
+    right-hand side is then in ``rhs`` and Jacobian in ``data`` (the caller goes on with SuperLU)."""
+    n = R.size
+    it = 0
+    while True:
+        rel = predict_residual(W, C, F, K, row_of, R, fpar, ipar, out)
+        if not math.isfinite(rel) or rel <= tolerance or it >= max_iterations:
+            return it, rel, False
+        assemble_pressure(data, diag_pos, pos, pin_pos, W, C, F, K, fpar, ipar)
+        for q in range(n):
+            rhs[q] = -R[q]
+        if pinned:
+            rhs[0] = 0.0
+        if not mg_setup(data, ell, MGL, MGI, MGA, MGS, MGW, DLU, PIV):
+            return it, rel, True
+        counts[0] += 1
+        target = max(reduction * math.sqrt(np.dot(rhs, rhs)), floor_factor * out[O_QREF] / math.sqrt(n))
+        kits = gmres(MGL, MGI, MGA, MGS, MGW, DLU, PIV, KRY, HES, rhs, dp, target, krylov_max)
+        if kits < 0:
+            return it, rel, True
+        counts[1] += kits
+        correct_pressure(C, dp, flags, RULES, fpar, ipar)
+        it += 1

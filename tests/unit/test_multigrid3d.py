@@ -164,3 +164,70 @@ def test_the_coarse_matrix_is_the_galerkin_product_with_the_couplings_divided_by
     assert np.array_equal(mg.MGA[:n0], fine)  # the finest level: A's entries, 0 in the slots it leaves empty
     assert np.array_equal(mg.MGS[:, :7], mg.MGA.astype(np.float32))
     assert np.allclose(mg.MGS[:, 7], 1.0 / mg.MGA[:, 0], rtol=1e-7)
+
+
+def _arrays(dims, periodic, seed):
+    """A 7-point matrix on ``dims`` (``poisson`` with its entries scaled at random: not symmetric) and its
+    hierarchy."""
+    A = poisson(dims, (0.1, 0.2, 0.15), periodic, 0.3)
+    A.data *= np.random.default_rng(seed).uniform(0.5, 1.5, A.data.size)
+    mg = multigrid_arrays(dims, periodic, A.indices, A.indptr, COARSEST, KRYLOV_RESTART)
+    assert mg is not None
+    assert MK.mg_setup(A.data, mg.ell, mg.MGL, mg.MGI, mg.MGA, mg.MGS, mg.MGW, mg.DLU, mg.PIV)
+    return A, mg
+
+
+@pytest.mark.parametrize("dims", [(3, 2, 1), (2, 3, 3), (1, 4, 2), (5, 1, 3), (4, 3, 5)])
+@pytest.mark.parametrize("periodic", [(False, False, False), (True, True, True), (True, False, True),
+                                      (False, True, False)])
+def test_the_matrix_product_is_scipys_on_every_face_and_wrap_around(dims, periodic):
+    # the neighbours of the cells on the box's faces are the wrap-around of a periodic axis (one or two cells
+    # thick included: the neighbour is the cell itself or both neighbours are one cell) or none
+    A, mg = _arrays(dims, periodic, 5)
+    x = np.random.default_rng(6).standard_normal(A.shape[0])
+    y = np.zeros_like(x)
+    MK.mg_matvec(mg.MGL, mg.MGI, mg.MGA, x, y)
+    assert np.allclose(y, A @ x, rtol=0.0, atol=1e-13 * np.abs(A @ x).max())
+
+
+@pytest.mark.parametrize("dims, periodic", [((12, 5, 3), (False, False, False)), ((10, 4, 3), (True, True, True)),
+                                            ((8, 6, 2), (True, False, True)), ((9, 2, 6), (False, True, False))])
+def test_the_presmoothing_is_lexicographic_gauss_seidel_with_the_single_precision_rows(dims, periodic):
+    # SWEEPS forward sweeps from x = 0 over the cells in the order (i, j, k), done plane by plane as a wave
+    # (step t: sweep s on plane t − s), with the rows and 1 / diagonal rounded to float32 as the smoother reads
+    # them; then the restricted residual Pᵀ (b − A x). Without a wrap-around along x the wave makes the same
+    # updates as whole sweeps one after the other; along a periodic x the last planes' first sweep reads
+    # plane 0 after its second
+    A, mg = _arrays(dims, periodic, 7)
+    assert mg.MGL.shape[1] - 1 >= 2
+    n = A.shape[0]
+    b = np.random.default_rng(8).standard_normal(n)
+    x = np.random.default_rng(9).standard_normal(n)  # overwritten: the sweeps start from 0
+    BC = mg.MGW[MK.MG_B]
+    wrap = bool(periodic[0]) and dims[0] > 1
+    MK._mg_presmooth_restrict(mg.MGL, mg.MGI, mg.MGS, x, b, BC, 0, wrap, True)
+    A32 = sp.csr_matrix(A.astype(np.float32).astype(np.float64))
+    inv = (1.0 / A.diagonal()).astype(np.float32).astype(np.float64)
+    ref = np.zeros(n)
+    plane = n // dims[0]
+    for t in range(dims[0] + MK.SWEEPS - 1):
+        for s in range(MK.SWEEPS):
+            if 0 <= t - s < dims[0]:
+                for g in range((t - s) * plane, (t - s + 1) * plane):
+                    row = slice(A32.indptr[g], A32.indptr[g + 1])
+                    cols, vals = A32.indices[row], A32.data[row]
+                    off = cols != g
+                    ref[g] = (b[g] - vals[off] @ ref[cols[off]]) * inv[g]
+    if not periodic[0]:
+        whole = np.zeros(n)
+        for _ in range(MK.SWEEPS):
+            for g in range(n):
+                row = slice(A32.indptr[g], A32.indptr[g + 1])
+                cols, vals = A32.indices[row], A32.data[row]
+                off = cols != g
+                whole[g] = (b[g] - vals[off] @ whole[cols[off]]) * inv[g]
+        assert np.allclose(ref, whole, rtol=0.0, atol=1e-13 * np.abs(whole).max())
+    assert np.allclose(x, ref, rtol=0.0, atol=1e-12 * np.abs(ref).max())
+    agg = mg.MGI[:n, MK.MGI_AGG]
+    coarse = np.bincount(agg, weights=b - A32 @ ref, minlength=mg.MGL[0, 2] - mg.MGL[0, 1])
+    assert np.allclose(BC[mg.MGL[0, 1]:mg.MGL[0, 2]], coarse, rtol=0.0, atol=1e-12 * np.abs(coarse).max())

@@ -175,61 +175,86 @@ def mg_setup(data, csc_ell, MGL, MGI, MGA, MGS, MGW, DLU, PIV):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _mg_row(MGI, MGA, X, o0, sa, sb, g, edge):
-    """Σ_d A[g, d] x[neighbour d] of cell g (local neighbours from MGI on the faces of the level's box,
-    else g ∓ sa, g ∓ sb, g ∓ 1 with sa = b c, sb = c); MGA: the float64 rows or the float32 MGS."""
-    if edge:
-        s = 0.0
-        for d in range(6):
-            c = MGI[g, MGI_NB + d]
-            if c >= 0:
-                s += MGA[g, 1 + d] * X[o0 + c]
-        return s
-    return (MGA[g, 1] * X[g - sa] + MGA[g, 2] * X[g + sa] + MGA[g, 3] * X[g - sb] + MGA[g, 4] * X[g + sb]
-            + MGA[g, 5] * X[g - 1] + MGA[g, 6] * X[g + 1])
+def _mg_wraps(MGL, MGI, l):
+    """The offsets (local index of the neighbour − the cell's) of the −x, +x, −y, +y, −z, +z neighbours of the
+    cells on the faces of level l's box: the wrap-around of a periodic axis, 0 where the face has no neighbour
+    (that matrix entry is 0: ``mg_setup``). The same on the whole face of a box grid, read from MGI at
+    the cells (0, 0, 0), (a − 1, 0, 0), (0, b − 1, 0) and (0, 0, c − 1)."""
+    o0, a, b, c = MGL[0, l], MGL[1, l], MGL[2, l], MGL[3, l]
+    last = ((a - 1) * b * c, (b - 1) * c, c - 1)
+    return (_mg_wrap(MGI, o0, 0, 0), _mg_wrap(MGI, o0, last[0], 1), _mg_wrap(MGI, o0, 0, 2),
+            _mg_wrap(MGI, o0, last[1], 3), _mg_wrap(MGI, o0, 0, 4), _mg_wrap(MGI, o0, last[2], 5))
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _mg_plane_gauss_seidel(MGL, MGI, MGS, X, B, l, i, forward):
+def _mg_wrap(MGI, o0, q, d):
+    """Offset of the neighbour d of the cell of local index q (0: none)."""
+    n = MGI[o0 + q, MGI_NB + d]
+    return n - q if n >= 0 else 0
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _mg_row(MGA, X, g, oxm, oxp, oym, oyp, ozm, ozp):
+    """Σ_d A[g, d] x[neighbour d] of cell g, its neighbours at g + the offsets (``_mg_wraps`` on the box's
+    faces: a face without a neighbour reads x[g] with its entry 0, which adds nothing); MGA: the float64
+    rows or the float32 MGS."""
+    return (MGA[g, 1] * X[g + oxm] + MGA[g, 2] * X[g + oxp] + MGA[g, 3] * X[g + oym] + MGA[g, 4] * X[g + oyp]
+            + MGA[g, 5] * X[g + ozm] + MGA[g, 6] * X[g + ozp])
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _mg_axis(i, n, step, wm, wp):
+    """(−, +) neighbour offsets of index i along an axis of n cells, ``step`` apart, wrap offsets wm, wp."""
+    return (-step if i > 0 else wm), (step if i < n - 1 else wp)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _mg_line_gauss_seidel(MGS, X, B, g0, c, oxm, oxp, oym, oyp, forward, W):
+    """Gauss-Seidel update of the c cells g0 … g0 + c − 1 of one z line, in increasing (``forward``) or
+    decreasing order: x_g = (b_g - Σ_d A[g, d] x[neighbour d]) / A[g, g]; neighbour offsets along x and y
+    given, W: ``_mg_wraps``."""
+    if c == 1:
+        X[g0] = (B[g0] - _mg_row(MGS, X, g0, oxm, oxp, oym, oyp, W[4], W[5])) * MGS[g0, 7]
+        return
+    fm, fp = (W[4], 1) if forward else (-1, W[5])  # −z, +z offsets of the line's first cell in this order
+    lm, lp = (-1, W[5]) if forward else (W[4], 1)  # and of its last
+    g = g0 if forward else g0 + c - 1
+    X[g] = (B[g] - _mg_row(MGS, X, g, oxm, oxp, oym, oyp, fm, fp)) * MGS[g, 7]
+    for kk in range(1, c - 1):
+        g = g0 + (kk if forward else c - 1 - kk)
+        X[g] = (B[g] - _mg_row(MGS, X, g, oxm, oxp, oym, oyp, -1, 1)) * MGS[g, 7]
+    g = g0 + c - 1 if forward else g0
+    X[g] = (B[g] - _mg_row(MGS, X, g, oxm, oxp, oym, oyp, lm, lp)) * MGS[g, 7]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _mg_plane_gauss_seidel(MGL, MGS, X, B, l, i, forward, W):
     """Gauss-Seidel update of the cells of plane i (x index) of level l, rows j then cells k in increasing
-    (``forward``) or decreasing order: x_g = (b_g - Σ_d A[g, d] x[neighbour d]) / A[g, g]."""
+    (``forward``) or decreasing order (``_mg_line_gauss_seidel``). W: ``_mg_wraps``."""
     o0, a, b, c = MGL[0, l], MGL[1, l], MGL[2, l], MGL[3, l]
-    sa, sb = b * c, c
-    edge_i = i == 0 or i == a - 1
+    oxm, oxp = _mg_axis(i, a, b * c, W[0], W[1])
     for jj in range(b):
         j = jj if forward else b - 1 - jj
-        g0 = o0 + (i * b + j) * c
-        if edge_i or j == 0 or j == b - 1:
-            for kk in range(c):
-                g = g0 + (kk if forward else c - 1 - kk)
-                X[g] = (B[g] - _mg_row(MGI, MGS, X, o0, sa, sb, g, True)) * MGS[g, 7]
-        else:
-            g = g0 if forward else g0 + c - 1
-            X[g] = (B[g] - _mg_row(MGI, MGS, X, o0, sa, sb, g, True)) * MGS[g, 7]
-            for kk in range(1, c - 1):
-                g = g0 + (kk if forward else c - 1 - kk)
-                X[g] = (B[g] - _mg_row(MGI, MGS, X, o0, sa, sb, g, False)) * MGS[g, 7]
-            if c > 1:
-                g = g0 + c - 1 if forward else g0
-                X[g] = (B[g] - _mg_row(MGI, MGS, X, o0, sa, sb, g, True)) * MGS[g, 7]
+        oym, oyp = _mg_axis(j, b, c, W[2], W[3])
+        _mg_line_gauss_seidel(MGS, X, B, o0 + (i * b + j) * c, c, oxm, oxp, oym, oyp, forward, W)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _mg_plane_restrict(MGL, MGI, MGS, X, B, BC, l, i):
+def _mg_plane_restrict(MGL, MGS, X, B, BC, l, i, W):
     """Adds Pᵀ (b - A x) of plane i of level l (x, b in X, B) to b of level l + 1 (in BC; the coarse cell of
-    (i, j, k) is ((i // rx) b' + j // ry) c' + k // rz)."""
+    (i, j, k) is ((i // rx) b' + j // ry) c' + k // rz). W: ``_mg_wraps``."""
     o0, a, b, c = MGL[0, l], MGL[1, l], MGL[2, l], MGL[3, l]
     rx, ry, rz = MGL[4, l], MGL[5, l], MGL[6, l]
     o1, bc, cc = MGL[0, l + 1], MGL[2, l + 1], MGL[3, l + 1]
-    sa, sb = b * c, c
-    edge_i = i == 0 or i == a - 1
+    oxm, oxp = _mg_axis(i, a, b * c, W[0], W[1])
     for j in range(b):
-        edge_ij = edge_i or j == 0 or j == b - 1
+        oym, oyp = _mg_axis(j, b, c, W[2], W[3])
         g0 = o0 + (i * b + j) * c
         t0 = o1 + ((i // rx) * bc + j // ry) * cc
         for k in range(c):
             g = g0 + k
-            r = B[g] - MGS[g, 0] * X[g] - _mg_row(MGI, MGS, X, o0, sa, sb, g, edge_ij or k == 0 or k == c - 1)
+            ozm, ozp = _mg_axis(k, c, 1, W[4], W[5])
+            r = B[g] - MGS[g, 0] * X[g] - _mg_row(MGS, X, g, oxm, oxp, oym, oyp, ozm, ozp)
             BC[t0 + k // rz] += r
 
 
@@ -259,10 +284,12 @@ def _mg_presmooth_restrict(MGL, MGI, MGS, X, B, BC, l, wrap, zero):
     """SWEEPS forward Gauss-Seidel sweeps of level l (x, b in X, B; from x = 0 if ``zero``), then b of
     level l + 1 (in BC) = Pᵀ (b - A x), in one pass over the planes: sweep s updates plane t - s at step t
     (its lower neighbour plane has had sweep s, its upper one sweep s - 1: the same updates as SWEEPS whole
-    sweeps one after the other), and the residual of plane t - SWEEPS, final by then, is restricted at
+    sweeps one after the other, but along a periodic x, where the last planes' first sweep reads plane 0
+    after its second), and the residual of plane t - SWEEPS, final by then, is restricted at
     once, while the planes are still in the cache; x = 0 is set a plane ahead of the first sweep.
     ``wrap``: the level is periodic along x (plane 0's residual waits for the last plane)."""
     o1, o2, a = MGL[0, l + 1], MGL[0, l + 2], MGL[1, l]
+    W = _mg_wraps(MGL, MGI, l)
     for g in range(o1, o2):
         BC[g] = 0.0
     if zero:
@@ -275,12 +302,12 @@ def _mg_presmooth_restrict(MGL, MGI, MGS, X, B, BC, l, wrap, zero):
         for s in range(SWEEPS):
             i = t - s
             if 0 <= i < a:
-                _mg_plane_gauss_seidel(MGL, MGI, MGS, X, B, l, i, True)
+                _mg_plane_gauss_seidel(MGL, MGS, X, B, l, i, True, W)
         i = t - SWEEPS
         if i >= (1 if wrap else 0):
-            _mg_plane_restrict(MGL, MGI, MGS, X, B, BC, l, i)
+            _mg_plane_restrict(MGL, MGS, X, B, BC, l, i, W)
     if wrap:
-        _mg_plane_restrict(MGL, MGI, MGS, X, B, BC, l, 0)
+        _mg_plane_restrict(MGL, MGS, X, B, BC, l, 0, W)
 
 
 @njit(cache=True, error_model="numpy")
@@ -289,6 +316,7 @@ def _mg_prolong_postsmooth(MGL, MGI, MGS, X, B, XC, l, wrap):
     pass over the planes from the last (each plane corrected just before the first sweep reads it;
     ``wrap``: periodic along x, plane 0 corrected first as the last plane reads it)."""
     a = MGL[1, l]
+    W = _mg_wraps(MGL, MGI, l)
     _mg_plane_prolong(MGL, X, XC, l, a - 1)
     if wrap and a > 1:
         _mg_plane_prolong(MGL, X, XC, l, 0)
@@ -299,7 +327,7 @@ def _mg_prolong_postsmooth(MGL, MGI, MGS, X, B, XC, l, wrap):
         for s in range(SWEEPS):
             i = a - 1 - t + s
             if 0 <= i < a:
-                _mg_plane_gauss_seidel(MGL, MGI, MGS, X, B, l, i, False)
+                _mg_plane_gauss_seidel(MGL, MGS, X, B, l, i, False, W)
 
 
 @njit(cache=True, error_model="numpy")
@@ -379,14 +407,15 @@ def mg_cycle(MGL, MGI, MGA, MGS, MGW, DLU, PIV, b, x):
 def mg_matvec(MGL, MGI, MGA, x, y):
     """y = A x with the finest level of the hierarchy."""
     a, b, c = MGL[1, 0], MGL[2, 0], MGL[3, 0]
-    sa, sb = b * c, c
+    W = _mg_wraps(MGL, MGI, 0)
     for i in range(a):
-        edge_i = i == 0 or i == a - 1
+        oxm, oxp = _mg_axis(i, a, b * c, W[0], W[1])
         for j in range(b):
-            edge_ij = edge_i or j == 0 or j == b - 1
+            oym, oyp = _mg_axis(j, b, c, W[2], W[3])
             for k in range(c):
                 g = (i * b + j) * c + k
-                y[g] = MGA[g, 0] * x[g] + _mg_row(MGI, MGA, x, 0, sa, sb, g, edge_ij or k == 0 or k == c - 1)
+                ozm, ozp = _mg_axis(k, c, 1, W[4], W[5])
+                y[g] = MGA[g, 0] * x[g] + _mg_row(MGA, x, g, oxm, oxp, oym, oyp, ozm, ozp)
 
 
 @njit(cache=True, error_model="numpy")

@@ -408,21 +408,40 @@ def test_volume_and_centroid_sums_in_any_number_of_slabs(periodic):
         cref[0][c] += w[p]
         for a in range(3):
             cref[a + 1][c] += w[p] * vel[p, a]
+    ones = [np.zeros(CELLS) for _ in range(4)]  # the number-weighted sums by centres, in particle order
+    for p in range(N):
+        c = tuple(cell_index(pos[p, a], 1.0 / SPACING[a], CELLS[a]) for a in range(3))
+        ones[0][c] += 1.0
+        for a in range(3):
+            ones[a + 1][c] += 1.0 * vel[p, a]
+    none = [np.empty((0, 0, 0))] * 4
     for m in slab_partitions(nx):
         out = [np.zeros(CELLS) for _ in range(4)]
         cout = [np.zeros(CELLS) for _ in range(4)]
         bit = VK3.slab_bits(m, nx)
         slabs = np.empty(N, np.int64)
-        VK3._volume_slabs(0, N, pos, r, SPACING[0], nx, periodic[0], bit, slabs)
+        VK3._volume_slabs(0, N, pos, r, SPACING[0], nx, periodic[0], bit, slabs, False)
         single = (slabs & (slabs - 1)) == 0  # all its cells in one slab
         assert single.all() == (m == 1) and (single.any() or m > 2), m
         for s in range(m):
             lo, hi = VK3.slab_bounds(s, m, nx)
-            VK3._volume_add(lo, hi, bit[lo], slabs, pos, r, scale, vel, *SPACING, *periodic, nodes, stride, work, *out)
+            VK3._volume_add(lo, hi, bit[lo], slabs, pos, r, scale, vel, *SPACING, *periodic, nodes, stride, work, *out,
+                            *none)
             VK3._centroid_add(lo, hi, N, w, vel, cells, *cout)
         for a in range(4):
             assert np.array_equal(out[a], ref[a]), (m, a)
             assert np.array_equal(cout[a], cref[a]), (m, a)
+        # the volumes and the number-weighted centre sums in one pass (the map of a "volume" method with
+        # "number" weighting)
+        VK3._volume_slabs(0, N, pos, r, SPACING[0], nx, periodic[0], bit, slabs, True)
+        vol, both = np.zeros(CELLS), [np.zeros(CELLS) for _ in range(4)]
+        for s in range(m):
+            lo, hi = VK3.slab_bounds(s, m, nx)
+            VK3._volume_add(lo, hi, bit[lo], slabs, pos, r, scale, vel, *SPACING, *periodic, nodes, stride, work, vol,
+                            *none[:3], *both)
+        assert np.array_equal(vol, ref[0]), m
+        for a in range(4):
+            assert np.array_equal(both[a], ones[a]), (m, a)
 
 
 @pytest.mark.parametrize("periodic", PERIODIC)

@@ -37,7 +37,9 @@ one contiguous block of every grid array) into one slab of whole yz planes per t
 each slab walks the particles in particle order, skips those not marked for it and adds the cells whose
 wrapped x index lies in it (``_volume_add``). Every cell then receives the same numbers, in the same order, as
 in one serial pass over all particles, so the maps are bitwise the same for any number of threads. At most
-``CHUNK`` particles, or one thread, take the one serial pass.
+``CHUNK`` particles, or one thread, take the one serial pass. The map of the "volume" method with the
+"number" weighting adds each particle's count and velocity to the cell of its centre in the same pass
+(``_volume_deposit``: one walk over the particles instead of two; the same sums in the same order).
 """
 import math
 
@@ -404,9 +406,10 @@ def slab_bits(m, nx):
 
 
 @njit(cache=True)
-def _volume_slabs(lo, hi, position, radius, dx, nx, px, bit, slabs):
+def _volume_slabs(lo, hi, position, radius, dx, nx, px, bit, slabs, centres):
     """slabs[p] for p in [lo, hi): the bits ``bit[i]`` (``slab_bits``) of the wrapped x indices of the cells of
-    ``_cell_range``, which ``_volume_range`` and ``_volume_add`` take for the sphere of p, OR-ed."""
+    ``_cell_range``, which ``_volume_range`` and ``_volume_add`` take for the sphere of p, OR-ed; with
+    ``centres`` that of the cell holding its centre (``cell_index``) too."""
     for p in range(lo, hi):
         a0, a1 = _cell_range(position[p, 0], radius[p], dx, nx, px)
         if a1 - a0 + 1 >= nx:
@@ -414,20 +417,25 @@ def _volume_slabs(lo, hi, position, radius, dx, nx, px, bit, slabs):
         b = np.int64(0)
         for i in range(a0, a1 + 1):
             b |= bit[i % nx]
+        if centres:
+            b |= bit[cell_index(position[p, 0], 1.0 / dx, nx)]
         slabs[p] = b
 
 
 @njit(cache=True)
 def _volume_add(lo, hi, own, slabs, position, radius, scale, velocity, dx, dy, dz, px, py, pz, nodes, stride, work,
-                out, ovx, ovy, ovz):
+                out, ovx, ovy, ovz, cn, cvx, cvy, cvz):
     """The sums of ``volume_deposit`` onto the cells whose (wrapped) x index lies in [lo, hi), slab ``own`` (its
     bit) of the particles' slabs ``slabs`` (``_volume_slabs``): the cells of ``_volume_range`` added in particle
     order (a sphere with the count −1 by ``sphere_box_volume`` of each cell, as the deposit was before node
     values); a sphere none of whose cells lies in the slab is skipped, one whose cells all lie in it adds them
-    without a test. ``slabs`` of size 0: the whole serial pass. ovx, ovy, ovz of size 0: the volumes only."""
+    without a test. ``slabs`` of size 0: the whole serial pass. ovx, ovy, ovz of size 0: the volumes only.
+    cn, cvx, cvy, cvz not of size 0: ``centroid_deposit3d`` with weight 1 into them in the same pass (1 and v[p]
+    to the cell holding the centre, ``cell_index``; the slabs then hold that cell's too)."""
     nx, ny, nz = out.shape
     every = slabs.shape[0] == 0
     weigh = ovx.shape[0] > 0  # the velocity sums too
+    count = cn.shape[0] > 0  # the number-weighted sums by centres too
     for p in range(position.shape[0]):
         whole = every
         if not every:
@@ -440,6 +448,15 @@ def _volume_add(lo, hi, own, slabs, position, radius, scale, velocity, dx, dy, d
         vx = velocity[p, 0]
         vy = velocity[p, 1]
         vz = velocity[p, 2]
+        if count:
+            i = cell_index(position[p, 0], 1.0 / dx, nx)
+            if whole or lo <= i < hi:
+                j = cell_index(position[p, 1], 1.0 / dy, ny)
+                k = cell_index(position[p, 2], 1.0 / dz, nz)
+                cn[i, j, k] += 1.0
+                cvx[i, j, k] += 1.0 * vx
+                cvy[i, j, k] += 1.0 * vy
+                cvz[i, j, k] += 1.0 * vz
         if m >= 0:
             for q in range(m):
                 f = e + 1 + 4 * q
@@ -484,7 +501,7 @@ def _volume_add(lo, hi, own, slabs, position, radius, scale, velocity, dx, dy, d
 
 @njit(cache=True, parallel=True)
 def _volume_add_parallel(position, radius, scale, velocity, dx, dy, dz, px, py, pz, nodes, stride, work, out, ovx,
-                         ovy, ovz):
+                         ovy, ovz, cn, cvx, cvy, cvz):
     """``_volume_add`` of each x slab (``slab_count``, ``slab_bounds``) on all threads, after each sphere's slabs
     (``_volume_slabs``, in chunks of ``CHUNK``)."""
     nx = out.shape[0]
@@ -492,12 +509,13 @@ def _volume_add_parallel(position, radius, scale, velocity, dx, dy, dz, px, py, 
     n = position.shape[0]
     bit = slab_bits(m, nx)
     slabs = np.empty(n, np.int64)
+    centres = cn.shape[0] > 0
     for c in prange((n + CHUNK - 1) // CHUNK):
-        _volume_slabs(c * CHUNK, min(n, (c + 1) * CHUNK), position, radius, dx, nx, px, bit, slabs)
+        _volume_slabs(c * CHUNK, min(n, (c + 1) * CHUNK), position, radius, dx, nx, px, bit, slabs, centres)
     for s in prange(m):
         lo, hi = slab_bounds(s, m, nx)
         _volume_add(lo, hi, bit[lo], slabs, position, radius, scale, velocity, dx, dy, dz, px, py, pz, nodes, stride,
-                    work, out, ovx, ovy, ovz)
+                    work, out, ovx, ovy, ovz, cn, cvx, cvy, cvz)
 
 
 @njit(cache=True)
@@ -507,6 +525,16 @@ def volume_deposit(position, radius, scale, velocity, dx, dy, dz, px, py, pz, ou
     radius, scale : (N,); out, ovx, ovy, ovz : (nx, ny, nz), accumulated into (ovx, ovy, ovz of size 0, e.g.
     (0, 0, 0): the volumes only). work : (≥ N ``volume_stride``,)
     float64 scratch (allocated here if None or shorter)."""
+    none = np.empty((0, 0, 0))
+    _volume_deposit(position, radius, scale, velocity, dx, dy, dz, px, py, pz, out, ovx, ovy, ovz, none, none, none,
+                    none, work)
+
+
+@njit(cache=True)
+def _volume_deposit(position, radius, scale, velocity, dx, dy, dz, px, py, pz, out, ovx, ovy, ovz, cn, cvx, cvy, cvz,
+                    work):
+    """``volume_deposit``, and with cn, cvx, cvy, cvz not of size 0 the sums of ``centroid_deposit3d`` with
+    weight 1 into them in the same pass over the particles (bitwise those of a separate call)."""
     nx, ny, nz = out.shape
     n = position.shape[0]
     nodes, stride = _volume_layout(radius, dx, dy, dz, nx, ny, nz, px, py, pz)
@@ -522,10 +550,10 @@ def volume_deposit(position, radius, scale, velocity, dx, dy, dz, px, py, pz, ou
         _volume_range(0, n, position, radius, scale, dx, dy, dz, nx, ny, nz, px, py, pz, nodes, stride, buf)
     if n > CHUNK and slab_count(nx) > 1:
         _volume_add_parallel(position, radius, scale, velocity, dx, dy, dz, px, py, pz, nodes, stride, buf, out, ovx,
-                             ovy, ovz)
+                             ovy, ovz, cn, cvx, cvy, cvz)
     else:
         _volume_add(0, nx, np.int64(1), np.empty(0, np.int64), position, radius, scale, velocity, dx, dy, dz, px, py,
-                    pz, nodes, stride, buf, out, ovx, ovy, ovz)
+                    pz, nodes, stride, buf, out, ovx, ovy, ovz, cn, cvx, cvy, cvz)
 
 
 @njit(cache=True)
@@ -651,13 +679,15 @@ def deposit_solids3d(method, weighting, position, radius, volume, velocity, dx, 
     n = position.shape[0]
     if method == 0:
         centroid_deposit3d(position, volume, velocity, dx, dy, dz, frac, wvx, wvy, wvz, work)  # Sun 2007 eq. 34
+    elif weighting == 0:  # the velocity weights by centres (Hoomans 1996 eq. 50) in the same pass
+        none = np.empty((0, 0, 0))
+        wsum[:, :, :] = 0.0
+        _volume_deposit(position, radius, np.ones(n), velocity, dx, dy, dz, px, py, pz, frac, none, none, none, wsum,
+                        wvx, wvy, wvz, work)
+        frac[:, :, :] /= norm
+        return
     else:
-        if weighting == 0:  # the velocity weights come from the centres below
-            none = np.empty((0, 0, 0))
-            volume_deposit(position, radius, np.ones(n), velocity, dx, dy, dz, px, py, pz, frac, none, none, none,
-                           work)
-        else:
-            volume_deposit(position, radius, np.ones(n), velocity, dx, dy, dz, px, py, pz, frac, wvx, wvy, wvz, work)
+        volume_deposit(position, radius, np.ones(n), velocity, dx, dy, dz, px, py, pz, frac, wvx, wvy, wvz, work)
     wsum[:, :, :] = frac
     frac[:, :, :] /= norm
     if weighting == 0:  # Hoomans 1996 eq. 50: by centres, each particle counts once

@@ -485,3 +485,41 @@ def test_coupled3d_cell_exchange_device_matches_host(packing_case, exchange):
     bal, ref = dev.gas.exchange_balance(), host.gas.exchange_balance()
     for k in ref:
         assert np.abs(bal[k] - ref[k]).max() <= 1e-9 * np.abs(ref[k]).max(), k
+
+
+@pytest.mark.parametrize("exchange", ["cell", "cell_beta"])
+def test_coupled3d_grid_is_sent_once_per_gas_step_and_after_a_restore(packing_case, tmp_path, exchange):
+    """With ``drag_update = "substep"`` the "cell" and "cell_beta" forces are evaluated at every sub-step; the
+    gas arrays they read change only with a gas step, a map or a restore (the coupling's ``gas_version``), and
+    are sent to the device once per gas step. A restore in the middle of a gas step (new gas arrays) makes the
+    next sub-step send them again, and the run then repeats the sub-steps it made from there bit for bit."""
+    from fluidem import Simulation
+    from fluidem.case import validate_case
+
+    data, _ = _bed(packing_case, n=64)
+    data["coupling"].update(momentum_exchange=exchange, drag_update="substep", gpu_exchange="device")
+    sim = Simulation(validate_case({**data, "device": "gpu"}))
+    sub = sim.gas.substeps
+    assert sub == 4 and sim.gas._device is not None
+
+    def sends(n):
+        """Sub-steps one at a time; how many of them sent the gas pressure again."""
+        out = 0
+        for _ in range(n):
+            before = sim.gas._device._sent.get(("gas", "p"))
+            sim.advance(1)
+            out += sim.gas._device._sent.get(("gas", "p")) != before
+        return out
+
+    sim.advance(sub)
+    assert sends(2 * sub) == 2  # two gas steps of four sub-steps
+    assert sends(2) == 1  # half a gas step: a checkpoint here, then the rest of the step
+    path = tmp_path / "restart.h5"
+    sim.save_checkpoint(path)
+    assert sends(2) == 0
+    ref = {k: np.array(getattr(sim.state, k)) for k in ("position", "velocity")}
+    sim.advance(sub)  # another gas step: the gas changed
+    sim.load_checkpoint(path)  # back to the middle of the step before
+    assert sends(2) == 1  # the restored gas, sent again
+    for k, b in ref.items():
+        assert np.array_equal(getattr(sim.state, k), b), k

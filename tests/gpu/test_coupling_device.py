@@ -394,3 +394,41 @@ def test_coupled_run_device_matches_host(packing_case, option):
         assert inv.min() >= 1 / 4e-3 * (1.0 - 1e-12) and np.any((inv > 250.001) & (inv < 277.7))  # mixed cells
         assert np.abs(dev.gas._inv_dbar - inv).max() <= SUM_RTOL * inv.max()
     assert dev.gas.last_map.voidage.min() < 0.9  # a bed, not a few grains
+
+
+def test_cell_beta_fields_are_sent_once_per_gas_step_and_after_a_restore(packing_case, tmp_path):
+    """With ``drag_update = "substep"`` the "cell_beta" forces are evaluated at every sub-step; their grid fields
+    (``_exchange_kernels.gas_force_fields``, the device copies keyed by the coupling's ``gas_version``) change
+    only with the gas, the map or a restore, and are built and sent once per gas step. A restore in the middle
+    of a gas step (new gas arrays) makes the next sub-step build them again, and the run then repeats the
+    sub-steps it made from there bit for bit."""
+    from fluidem import Simulation
+    from fluidem.case import validate_case
+
+    data, _ = _bed(packing_case, {"momentum_exchange": "cell_beta", "drag_update": "substep"})
+    data["coupling"]["gpu_exchange"] = "device"
+    sim = Simulation(validate_case({**data, "device": "gpu"}))
+    sub = sim.gas.substeps
+    assert sub == 4
+
+    def builds(n):
+        """Sub-steps one at a time; how many of them sent new fields."""
+        out = 0
+        for _ in range(n):
+            before = sim.gas._device._fields_key
+            sim.advance(1)
+            out += sim.gas._device._fields_key != before
+        return out
+
+    sim.advance(sub)
+    assert builds(2 * sub) == 2  # two gas steps of four sub-steps
+    assert builds(2) == 1  # half a gas step: a checkpoint here, then the rest of the step
+    path = tmp_path / "restart.h5"
+    sim.save_checkpoint(path)
+    assert builds(2) == 0
+    ref = {k: np.array(getattr(sim.state, k)) for k in ("position", "velocity")}
+    sim.advance(sub)  # another gas step: the gas changed
+    sim.load_checkpoint(path)  # back to the middle of the step before
+    assert builds(2) == 1  # the restored gas's fields, sent again (on the device, as before the checkpoint)
+    for k, b in ref.items():
+        assert np.array_equal(getattr(sim.state, k), b), k

@@ -159,6 +159,8 @@ class GasCoupling:
         self.polydisperse = self.options.resolved_polydisperse(2.0 * st.radius)
         self._inv_dbar = np.zeros(gd.shape if self.polydisperse == "sauter_y2" else (0, 0))
         self._device = None
+        # changed by every gas step, map and restore: the GPU "cell_beta" forces rebuild their grid fields only then
+        self.gas_version = 0
         if hasattr(engine, "device_arrays"):  # particles on a GPU: the particle side there too, where it can
             from .exchange_gpu import device_exchange
 
@@ -188,6 +190,7 @@ class GasCoupling:
     def _map(self):
         """particles → grid at the current positions: a ``SolidsMap`` (Sun 2007 eqs 34-35 / Hoomans eqs 49-50),
         and the cells' 1/D̄ of a polydisperse drag (DEM book 2012 eq. 10, ``voidage.sauter_inverse``)."""
+        self.gas_version += 1  # the map's 1/D̄ changes what the gas force reads
         if self._device is not None:
             return self._device.map(self.mapping, self.grid)
         st = self._particles()
@@ -329,6 +332,7 @@ class GasCoupling:
                                              solids_u=us, solids_v=vs, pressure_voidage=pv)
         self.courant_max = max(self.courant_max, self.last_info.courant)
         self.gas_steps += 1
+        self.gas_version += 1
         self._paired_ready = True
 
     def to_particles(self) -> None:
@@ -385,7 +389,9 @@ class GasCoupling:
         out of range raise ValueError after the pass (those particles' forces are then NaN).
         """
         eng = self.engine
-        if self._device is not None and self._paired_ready:  # the "particle" or "cell" exchange, on the GPU
+        # the "particle" or "cell" exchange on the GPU once a gas step made its sums; "cell_beta" at any time (it
+        # reads the gas alone: also before the first gas step and after a restore)
+        if self._device is not None and (self._paired_ready or self.exchange == "cell_beta"):
             self._check_gas()
             if self.exchange == "cell":
                 self._device.set_cell_forces(bool(self.options.pressure_gradient_force))
@@ -496,6 +502,7 @@ class GasCoupling:
         if solver:  # absent from checkpoints written before 2026-11-26: fresh factors
             self.solver.restore_factors(solver)
         self.gas_steps = int(scalars["gas_steps"])
+        self.gas_version += 1
         self.courant_max = float(scalars.get("gas_courant_max", 0.0))  # absent from checkpoints before 2026-11-26
         self._set_volumes()  # the restored particles may be numbered otherwise than at construction
         self._paired_ready = False

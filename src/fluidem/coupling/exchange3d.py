@@ -105,6 +105,8 @@ class GasCoupling3D(GasCoupling):
             engine.reorder_listeners.append(self._reorder)
         self._paired_ready = False
         self._gas_ok = None
+        # changed by every gas step, map and restore: the GPU forces of the sub-steps send the grid only then
+        self.gas_version = 0
         self.polydisperse = self.options.resolved_polydisperse(2.0 * st.radius)
         self._inv_dbar = np.zeros(gd.shape if self.polydisperse == "sauter_y2" else (0, 0, 0))
         smap = self._map()
@@ -122,6 +124,7 @@ class GasCoupling3D(GasCoupling):
     def _map(self):
         """particles → grid at the current positions (``VoidageMapping.map_particles`` on the 3D grid), and the
         cells' 1/D̄ of a polydisperse drag (DEM book 2012 eq. 10)."""
+        self.gas_version += 1
         st, gd = self._particles(), self.grid
         if self._inv_dbar.shape[0] > 0:
             VK3.sauter_inverse3d(st.position, st.radius, self.volume, gd.dx, gd.dy, gd.dz, self._inv_dbar)
@@ -214,6 +217,7 @@ class GasCoupling3D(GasCoupling):
                                              pressure_voidage=pv)
         self.courant_max = max(self.courant_max, self.last_info.courant)
         self.gas_steps += 1
+        self.gas_version += 1
         self._paired_ready = True
 
     def _deposit(self, voidage):
@@ -375,6 +379,7 @@ class GasCoupling3D(GasCoupling):
         if solver:
             self.solver.restore_factors(solver)
         self.gas_steps = int(scalars["gas_steps"])
+        self.gas_version += 1
         self.courant_max = float(scalars.get("gas_courant_max", 0.0))
         self._set_volumes()
         self._paired_ready = False

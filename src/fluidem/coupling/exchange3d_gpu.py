@@ -190,8 +190,7 @@ class DeviceExchange3D(DeviceExchange):
         if self.n:
             d = self.engine.device_arrays()
             self._send(voidage=voidage, rho=gs.rho, u=gs.u, v=gs.v, w=gs.w)
-            for k, a in zip(("su", "sv", "sw"), (solids_u, solids_v, solids_w)):
-                c[k].copy_to_device(np.ascontiguousarray(a, dtype=float))
+            self._put("cell", c, None, {"su": solids_u, "sv": solids_v, "sw": solids_w})
             g = self._gas
             C3.cell_beta_deposit3d[self._blocks(C3.THREADS), C3.THREADS](
                 self.gas_law, d["position"], d["radius"], self._volume(), g["u"], g["v"], g["w"], g["rho"],
@@ -230,9 +229,8 @@ class DeviceExchange3D(DeviceExchange):
             return
         cp, gd, gs, c = self.coupling, self.coupling.grid, self.coupling.state, self._cellx
         d = self.engine.device_arrays()
-        for k, a in zip(("beta", "su", "sv", "sw"), cp._cell_inputs):
-            c[k].copy_to_device(np.ascontiguousarray(a, dtype=float))
-        self._send(u=gs.u, v=gs.v, w=gs.w, p=gs.p)
+        self._put("cell", c, cp.gas_version, dict(zip(("beta", "su", "sv", "sw"), cp._cell_inputs)))
+        self._send(cp.gas_version, u=gs.u, v=gs.v, w=gs.w, p=gs.p)
         self._zero(c["solids"])
         blocks, threads, g = self._blocks(C3.THREADS), C3.THREADS, self._gas
         C3.cell_solids3d[blocks, threads](d["position"], self._volume(), float(gd.dx), float(gd.dy), float(gd.dz),
@@ -255,14 +253,15 @@ class DeviceExchange3D(DeviceExchange):
             return 0
         cp, gd, gs = self.coupling, self.coupling.grid, self.coupling.state
         d = self.engine.device_arrays()
-        self._send(u=gs.u, v=gs.v, w=gs.w, voidage=gs.voidage, rho=gs.rho, p=gs.p)
+        self._send(cp.gas_version, u=gs.u, v=gs.v, w=gs.w, voidage=gs.voidage, rho=gs.rho, p=gs.p)
         self._zero_bad()
         g, threads = self._gas, C3.THREADS
         blocks = self._blocks(threads)
         C3.kp_now3d[blocks, threads](
             self.law, d["position"], d["velocity"], d["radius"], self._volume(), g["u"], g["v"], g["w"], g["voidage"],
-            g["rho"], float(cp.solver.props.viscosity), self._send_inv_dbar(), float(gd.dx), float(gd.dy),
-            float(gd.dz), float(cp.mapping.minimum_voidage), *cp._periodic, bool(cp._fold), self.kp, self._valid,
+            g["rho"], float(cp.solver.props.viscosity), self._send_inv_dbar(cp.gas_version), float(gd.dx),
+            float(gd.dy), float(gd.dz), float(cp.mapping.minimum_voidage), *cp._periodic, bool(cp._fold), self.kp,
+            self._valid,
             self.bad)
         bad = int(self.bad.copy_to_host()[0])
         if bad:
@@ -286,6 +285,7 @@ class DeviceGasCoupling3D(GasCoupling3D):
 
     def _map(self):
         if self._device is not None:
+            self.gas_version += 1
             return self._device.map(self.mapping, self.grid)
         return super()._map()
 
@@ -327,7 +327,9 @@ class DeviceGasCoupling3D(GasCoupling3D):
         return beta, face_solids, pv
 
     def set_particle_forces(self) -> None:
-        if self._device is not None and self._paired_ready:  # K_p or the cell inputs of the step on the device
+        # K_p or the cell inputs of the step on the device; "cell_beta" at any time (it reads the gas alone: also
+        # before the first gas step and after a restore)
+        if self._device is not None and (self._paired_ready or self.exchange == "cell_beta"):
             self._check_gas()
             if self.exchange == "cell":
                 self._device.set_cell_forces(bool(self.options.pressure_gradient_force))

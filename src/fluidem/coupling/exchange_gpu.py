@@ -94,6 +94,8 @@ class DeviceExchange:
         self.gas_law = cuda.to_device(np.ascontiguousarray(coupling._gas_law)) if self._cellx else None
         # the "cell_beta" forces' wall-extended fields (host, device) and interpolation nodes (``set_gas_forces``)
         self._fields = self._dev_fields = self._dev_nodes = None
+        self._fields_key = None  # (the coupling's gas_version, pressure) of the fields on the device
+        self._sent = {}  # (buffer tag, name) -> the gas_version its device copy holds (``_put``)
 
     @staticmethod
     def _kernel_modules():
@@ -151,16 +153,28 @@ class DeviceExchange:
                 a[...] = 0.0
         sauter_finish(*self._host_sauter, self.coupling._inv_dbar)
 
-    def _send_inv_dbar(self):
+    def _send_inv_dbar(self, version=None):
         """The coupling's 1/D̄ per cell on the device (for ``deposit``), or the empty array of a monodisperse
-        drag."""
+        drag (``version``: as ``_put``)."""
         if self._mixture:
-            self.inv_dbar.copy_to_device(np.ascontiguousarray(self.coupling._inv_dbar, dtype=float))
+            self._put("inv_dbar", {"": self.inv_dbar}, version, {"": self.coupling._inv_dbar})
         return self.inv_dbar
 
-    def _send(self, **fields) -> None:
+    def _send(self, version=None, **fields) -> None:
+        """Gas-grid arrays into the device buffers ``self._gas`` (``version``: as ``_put``)."""
+        self._put("gas", self._gas, version, fields)
+
+    def _put(self, tag, buffers, version, fields) -> None:
+        """Copy each array of ``fields`` into ``buffers`` (device arrays by the same names). With ``version``
+        (the coupling's ``gas_version``, which every gas step, map and restore changes) a buffer that already
+        holds that version's array is left as it is: the forces of the sub-steps of one gas step send the grid
+        once. A copy without a version (a stage's own inputs) is always made and matches no version."""
         for k, a in fields.items():
-            self._gas[k].copy_to_device(np.ascontiguousarray(a, dtype=float))
+            key = (tag, k)
+            if version is not None and self._sent.get(key) == version:
+                continue
+            buffers[k].copy_to_device(np.ascontiguousarray(a, dtype=float))
+            self._sent[key] = version
 
     # ------------------------------------------------------------ stages
     def map(self, mapping, grid) -> SolidsMap:
@@ -247,8 +261,7 @@ class DeviceExchange:
         if self.n:
             d = self.engine.device_arrays()
             self._send(voidage=voidage, rho=gs.rho, u=gs.u, v=gs.v)
-            c["su"].copy_to_device(np.ascontiguousarray(solids_u, dtype=float))
-            c["sv"].copy_to_device(np.ascontiguousarray(solids_v, dtype=float))
+            self._put("cell", c, None, {"su": solids_u, "sv": solids_v})
             g = self._gas
             CC.cell_beta_deposit[self._blocks(CC.THREADS), CC.THREADS](
                 self.gas_law, d["position"], d["radius"], self._volume(), g["u"], g["v"], g["rho"], g["voidage"],
@@ -287,9 +300,8 @@ class DeviceExchange:
             return
         cp, gd, gs, c = self.coupling, self.coupling.grid, self.coupling.state, self._cellx
         d = self.engine.device_arrays()
-        for k, a in zip(("beta", "su", "sv"), cp._cell_inputs):
-            c[k].copy_to_device(np.ascontiguousarray(a, dtype=float))
-        self._send(u=gs.u, v=gs.v, p=gs.p)
+        self._put("cell", c, cp.gas_version, dict(zip(("beta", "su", "sv"), cp._cell_inputs)))
+        self._send(cp.gas_version, u=gs.u, v=gs.v, p=gs.p)
         self._zero(c["solids"])
         blocks, threads, g = self._blocks(CC.THREADS), CC.THREADS, self._gas
         CC.cell_solids[blocks, threads](d["position"], self._volume(), float(gd.dx), float(gd.dy), c["solids"])
@@ -302,8 +314,10 @@ class DeviceExchange:
         """The "cell_beta" exchange's gas force on each particle at the current gas into the engine's ``ext_force``,
         its total force following (``GasCoupling._gas_forces``): the wall-extended cell and face fields on the host
         (``_exchange_kernels.gas_force_fields``), each particle's drag and −V_p ∇p on the device
-        (``_cell_cuda.gas_forces``). Raises ValueError where drag arguments are out of range (those forces NaN,
-        as on the host)."""
+        (``_cell_cuda.gas_forces``). The fields are rebuilt and sent only when the gas, the map or the pressure flag
+        changed since the last call (``gas_version``): with ``drag_update = "substep"`` once per gas step, not at
+        every sub-step. Raises ValueError where drag arguments are out of range (those forces NaN, as on the
+        host)."""
         from . import _cell_cuda as CC
         from . import _exchange_kernels as EK
 
@@ -312,19 +326,22 @@ class DeviceExchange:
         cp, gd, gs = self.coupling, self.coupling.grid, self.coupling.state
         cp._check_gas()
         nx, ny = gd.shape
-        f = self._fields = self._fields or {
-            "cen": np.empty((nx + 2, ny + 2, 2)), "xfa": np.zeros((nx + 1, ny + 2, 2)),
-            "yfa": np.zeros((nx + 2, ny + 1, 2)), "dbar": np.empty((nx + 2, ny + 2) if self._mixture else (0, 0))}
-        EK.gas_force_fields(gs.u, gs.v, gs.voidage, gs.rho, gs.p, cp._inv_dbar, float(gd.dx), float(gd.dy),
-                            bool(pressure), f["cen"], f["xfa"], f["yfa"], f["dbar"])
-        if self._dev_fields is None:
-            cuda = self._cuda
-            self._dev_fields = {k: cuda.device_array(a.shape) for k, a in f.items()}
-            self._dev_nodes = tuple(cuda.to_device(np.ascontiguousarray(a, dtype=float)) for a in cp._nodes)
+        key = (cp.gas_version, bool(pressure))
+        if key != self._fields_key:
+            f = self._fields = self._fields or {
+                "cen": np.empty((nx + 2, ny + 2, 2)), "xfa": np.zeros((nx + 1, ny + 2, 2)),
+                "yfa": np.zeros((nx + 2, ny + 1, 2)), "dbar": np.empty((nx + 2, ny + 2) if self._mixture else (0, 0))}
+            EK.gas_force_fields(gs.u, gs.v, gs.voidage, gs.rho, gs.p, cp._inv_dbar, float(gd.dx), float(gd.dy),
+                                bool(pressure), f["cen"], f["xfa"], f["yfa"], f["dbar"])
+            if self._dev_fields is None:
+                cuda = self._cuda
+                self._dev_fields = {k: cuda.device_array(a.shape) for k, a in f.items()}
+                self._dev_nodes = tuple(cuda.to_device(np.ascontiguousarray(a, dtype=float)) for a in cp._nodes)
+            for k, a in f.items():
+                if a.size:
+                    self._dev_fields[k].copy_to_device(a)
+            self._fields_key = key
         g = self._dev_fields
-        for k, a in f.items():
-            if a.size:
-                g[k].copy_to_device(a)
         self._zero_bad()
         d = self.engine.device_arrays()
         CC.gas_forces[self._blocks(CC.THREADS), CC.THREADS](

@@ -454,9 +454,9 @@ def _volume_add(lo, hi, own, slabs, position, radius, scale, velocity, dx, dy, d
                 j = cell_index(position[p, 1], 1.0 / dy, ny)
                 k = cell_index(position[p, 2], 1.0 / dz, nz)
                 cn[i, j, k] += 1.0
-                cvx[i, j, k] += 1.0 * vx
-                cvy[i, j, k] += 1.0 * vy
-                cvz[i, j, k] += 1.0 * vz
+                cvx[i, j, k] += vx
+                cvy[i, j, k] += vy
+                cvz[i, j, k] += vz
         if m >= 0:
             for q in range(m):
                 f = e + 1 + 4 * q

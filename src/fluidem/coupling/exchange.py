@@ -159,7 +159,7 @@ class GasCoupling:
         self.polydisperse = self.options.resolved_polydisperse(2.0 * st.radius)
         self._inv_dbar = np.zeros(gd.shape if self.polydisperse == "sauter_y2" else (0, 0))
         self._device = None
-        # changed by every gas step, map and restore: the GPU "cell_beta" forces rebuild their grid fields only then
+        # changed by every gas step, map and restore: the GPU forces of the sub-steps send the grid only then
         self.gas_version = 0
         if hasattr(engine, "device_arrays"):  # particles on a GPU: the particle side there too, where it can
             from .exchange_gpu import device_exchange

@@ -100,7 +100,7 @@ def main(argv=None) -> int:
     t_newton = _least(newton_all, max(1, a.blocks // 10), prepare=prepare) / len(newton)
     # the last step's first correction: its Jacobian, hierarchy and right-hand side, as the loop makes them
     (W, C, F, K, row_of, R, fpar, ipar, out, data, diag_pos, pos, pin_pos, flags, RULES, ell, MGL, MGI, MGA, MGS, MGW,
-     DLU, PIV, KRY, HES, rhs, dp, pinned, tol, maxit, red, floor, kmax, counts) = _copy(newton[-1])
+     DLU, PIV, KRY, HES, rhs, dp, pinned, tol, maxit, red, floor, kmax, counts, chord) = _copy(newton[-1])
     K3.predict_residual(W, C, F, K, row_of, R, fpar, ipar, out)
     K3.assemble_pressure(data, diag_pos, pos, pin_pos, W, C, F, K, fpar, ipar)
     rhs[:] = -R

@@ -996,33 +996,47 @@ def correct_pressure(C, dp, flags, RULES, fpar, ipar):
 @njit(cache=True, error_model="numpy")
 def newton_multigrid(W, C, F, K, row_of, R, fpar, ipar, out, data, diag_pos, pos, pin_pos, flags, RULES, ell, MGL, MGI,
                      MGA, MGS, MGW, DLU, PIV, KRY, HES, rhs, dp, pinned, tolerance, max_iterations, reduction,
-                     floor_factor, krylov_max, counts):
+                     floor_factor, krylov_max, counts, chord):
     """The Newton iterations of a gas step on the multigrid path, in one compiled call: the continuity residual
     (``predict_residual``) until it is at most ``tolerance`` (or not finite, or after ``max_iterations``), each
-    iteration solving J p' = −R with the Jacobian assembled (``assemble_pressure``), a new hierarchy
-    (``_multigrid3d_kernels.mg_setup``) and GMRES to max(``reduction`` ‖R‖₂, ``floor_factor`` × the reference
-    flow / √n), then ``correct_pressure``. ``pinned``: row 0 is the pressure level's (its right-hand side 0).
-    ``counts`` [hierarchies, GMRES iterations] are added to. Returns (iterations, mass residual, failed):
-    ``failed`` where the hierarchy could not be made or GMRES stalled in the iteration reached, whose
-    right-hand side is then in ``rhs`` and Jacobian in ``data`` (the caller goes on with SuperLU)."""
+    iteration solving J p' = −R by GMRES to max(``reduction`` ‖R‖₂, ``floor_factor`` × the reference flow / √n),
+    then ``correct_pressure``. The first iteration of the step assembles the Jacobian (``assemble_pressure``) and
+    makes its hierarchy (``_multigrid3d_kernels.mg_setup``). A later one keeps the last hierarchy, and with it
+    the last Jacobian as GMRES's matrix (a chord step of the inexact Newton method), where the last correction
+    cut the residual to at most ``chord`` times what it was (0: never); it assembles again where the reduction
+    was weaker or GMRES on the kept matrix does not converge. The residual, and so the convergence test, is
+    always the current one. ``pinned``: row 0 is the pressure level's (its right-hand side 0). ``counts``
+    [hierarchies, GMRES iterations] are added to. Returns (iterations, mass residual, failed): ``failed`` where
+    the hierarchy could not be made or GMRES stalled on a fresh one in the iteration reached, whose right-hand
+    side is then in ``rhs`` and Jacobian in ``data`` (the caller goes on with SuperLU)."""
     n = R.size
     it = 0
+    prev = math.inf
+    kept = False  # a hierarchy of this step is set up
     while True:
         rel = predict_residual(W, C, F, K, row_of, R, fpar, ipar, out)
         if not math.isfinite(rel) or rel <= tolerance or it >= max_iterations:
             return it, rel, False
-        assemble_pressure(data, diag_pos, pos, pin_pos, W, C, F, K, fpar, ipar)
         for q in range(n):
             rhs[q] = -R[q]
         if pinned:
             rhs[0] = 0.0
-        if not mg_setup(data, ell, MGL, MGI, MGA, MGS, MGW, DLU, PIV):
-            return it, rel, True
-        counts[0] += 1
         target = max(reduction * math.sqrt(np.dot(rhs, rhs)), floor_factor * out[O_QREF] / math.sqrt(n))
-        kits = gmres(MGL, MGI, MGA, MGS, MGW, DLU, PIV, KRY, HES, rhs, dp, target, krylov_max)
+        kits = -1
+        if kept and rel <= chord * prev:
+            kits = gmres(MGL, MGI, MGA, MGS, MGW, DLU, PIV, KRY, HES, rhs, dp, target, krylov_max)
+            if kits >= 0:
+                counts[1] += kits
         if kits < 0:
-            return it, rel, True
-        counts[1] += kits
+            assemble_pressure(data, diag_pos, pos, pin_pos, W, C, F, K, fpar, ipar)
+            if not mg_setup(data, ell, MGL, MGI, MGA, MGS, MGW, DLU, PIV):
+                return it, rel, True
+            counts[0] += 1
+            kept = True
+            kits = gmres(MGL, MGI, MGA, MGS, MGW, DLU, PIV, KRY, HES, rhs, dp, target, krylov_max)
+            if kits < 0:
+                return it, rel, True
+            counts[1] += kits
         correct_pressure(C, dp, flags, RULES, fpar, ipar)
+        prev = rel
         it += 1

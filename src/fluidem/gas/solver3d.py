@@ -17,7 +17,10 @@ The pressure corrections are solved (``linear_solver``) by GMRES with an aggrega
 1.6 to 2.2 times higher at 1e6 than at 1e4 cells, ``benchmarks/README.md``; "multigrid")
 or by SciPy's SuperLU ("superlu", its factors kept from step to step while the matrix changes by less
 than ``jacobian_reuse``); "auto" is the multigrid, which gives way to SuperLU if it fails. On the multigrid
-path a step's Newton iterations run in one compiled call (``_solver3d_kernels.newton_multigrid``). Measured on the
+path a step's Newton iterations run in one compiled call (``_solver3d_kernels.newton_multigrid``); an iteration
+after one that cut the mass residual to at most ``CHORD_REDUCTION`` of what it was keeps that iteration's
+Jacobian and hierarchy (a chord step: on ``bubbling-3d`` the second iteration of every step, which saves one
+assembly and one hierarchy a step with the same GMRES iterations; ``tests/unit/test_gas3d_chord.py``). Measured on the
 3D bubbling bed of ``benchmarks/gas3d_step.py`` (ideal gas, moving voidage), the multigrid took less CPU
 time per step than SuperLU on every grid: 0.32 against 0.36 ms at 288 cells, 0.88 against 1.7 ms at 1200,
 9.9 against 190 ms at 1e4 (SuperLU's fill-in grows fast in 3D).
@@ -83,6 +86,11 @@ LINEAR_SOLVERS_3D = ("auto", "multigrid", "superlu")
 # KRYLOV_REDUCTION: one more GMRES iteration, and the Newton iterations no longer stop on a pressure
 # correction left 1e-4 short, e.g. a closed box's hydrostatic profile off by 1e-9 Pa, not 1e-11)
 KRYLOV_REDUCTION_3D = 1e-5
+# multigrid path: a Newton iteration keeps the last iteration's Jacobian and hierarchy (a chord step) where that
+# iteration cut the mass residual to at most this fraction. Where the cut is that deep the Jacobian has stopped
+# changing; on a start-up with pressure changes of 1-2 kPa a step (cuts of 1e-2 to 1e-3), a threshold of 1e-2
+# took 4-5 iterations a step where fresh Jacobians took 3, and 1e-3 took 3 (``tests/unit/test_gas3d_chord.py``)
+CHORD_REDUCTION = 1e-3
 _LOW_SIDES = ("left", "bottom", "front")
 # grids of fewer cells run the kernels' passes serially on any number of threads: on a 2-core machine the
 # threaded passes saved nothing at 1800 cells, and lost at 1800 to 1e5 cells whenever another process
@@ -521,7 +529,7 @@ class GasSolver3D(GasSolver):
                 self.W, self.C, self.F, self.K, self.row_of, self.R, fpar, ipar, out, self.MAT[0], self.diag_pos,
                 self.pos, self.pin_pos, self.flags, self.RULES, mg.ell, mg.MGL, mg.MGI, mg.MGA, mg.MGS, mg.MGW, mg.DLU,
                 mg.PIV, mg.KRY, mg.HES, self._rhs, self.dp, self.pinned, self.tolerance, self.max_iterations,
-                KRYLOV_REDUCTION_3D, 0.1 * self.tolerance, self.krylov_max, self._counts)
+                KRYLOV_REDUCTION_3D, 0.1 * self.tolerance, self.krylov_max, self._counts, CHORD_REDUCTION)
             if failed:  # the hierarchy failed or GMRES stalled: SuperLU from this iteration on
                 self._solver = "superlu"
                 self._lu = None

@@ -267,7 +267,9 @@ class GasSolver:
         slower but skip the factorisation. 0 refactorises whenever anything changed.
         The band factorises again only the blocks (lines of cells) from the first one
         whose rows changed by more than 0.3 times this fraction. Not used by multigrid,
-        which makes its hierarchy anew every iteration.
+        which makes its hierarchy anew every iteration (on 3D grids anew every step: an
+        iteration after a cut of the residual to ``solver3d.CHORD_REDUCTION`` or less keeps
+        the last one).
     linear_solver : {"auto", "band", "multigrid", "superlu"}
         Solution of the pressure-correction equations: "band", a compiled band LU without
         pivoting (the matrix is diagonally dominant; the unknowns are numbered along the
@@ -861,7 +863,7 @@ class GasSolver:
         at the tolerance's level, and a bubbling bed, being chaotic, makes that a different flow within a
         second (tsuji-jet-background: particles 0.14 m apart 0.1 s after a resume). With these arrays restored
         (``restore_factors``) the resumed run goes on bit for bit. The band and SuperLU paths (the
-        multigrid makes its hierarchy anew every iteration)."""
+        multigrid makes its hierarchy anew every iteration, on 3D grids every step)."""
         ipar = self._ipar
         out = {"matrix": self.MAT, "band": self._band, "band_lu": self._band_lu,
                "flags": np.array([ipar[lay.I_HAVE_LU], ipar[lay.I_SOLVER]], np.int64)}

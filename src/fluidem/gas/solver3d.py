@@ -587,7 +587,7 @@ class GasSolver3D(GasSolver):
     def checkpoint_arrays(self) -> dict[str, np.ndarray]:
         """What the next step starts from besides the state, for checkpoints: the linear solver in use (the
         multigrid gives way to SuperLU for good when it fails) and the matrix whose SuperLU factors the next
-        step may reuse (``jacobian_reuse``). The multigrid makes its hierarchy anew every iteration. With
+        step may reuse (``jacobian_reuse``). The multigrid makes its hierarchy anew every step. With
         these restored (``restore_factors``, which factorises the same matrix again) a resumed run goes on
         bit for bit."""
         have = self._lu is not None

@@ -23,10 +23,12 @@ rounds), the median CPU milliseconds and CPU microseconds per cell, pressure cor
 per step.
 
 ``--matrices K``: instead of whole steps, the linear solvers alone on the same matrices. The bed runs
-``--warmup`` steps, then the pressure-correction matrices and right-hand sides of the next steps are kept
-(K of them); each is solved to the target that ``GasSolver`` sets (``KRYLOV_REDUCTION_3D`` of the
-right-hand side's norm, or the absolute floor) by (a) fluidem's GMRES with the aggregation V-cycle
-(``_multigrid3d_kernels``: hierarchy made anew for every matrix, as the solver does) and (b) pyamg's smoothed
+``--warmup`` steps, then the matrix and right-hand side of the first pressure correction of each of the next
+steps are kept (K of them, ``keeping_corrections``; with pyamg installed, else fluidem's row alone); each is
+solved to the target that ``GasSolver`` sets (``KRYLOV_REDUCTION_3D`` of the
+right-hand side's norm, or the absolute floor) by (a) fluidem's GMRES with the aggregation W-cycle
+(``_multigrid3d_kernels``: hierarchy made anew for every matrix, as the solver does at each step's first
+correction) and (b) pyamg's smoothed
 aggregation (``smoothed_aggregation_solver``, its defaults: symmetric Gauss-Seidel, one V-cycle as
 preconditioner) inside SciPy's GMRES and BiCGStab (restart 30), with the pyamg hierarchy made for every
 matrix ("setup+solve") and, a lower bound for a scheme that would keep it, made once for the first of the K
@@ -35,11 +37,12 @@ Printed per grid and solver: CPU microseconds per cell and solve (median over th
 all K matrices), iterations per solve, and the largest ||b - A x|| / target (<= 1: each reached its target).
 
 ``--kernels K``: where a step's time goes, one round. The bed (multigrid) runs ``--warmup`` steps, then
-``--seconds`` of steps with every kernel call of ``GasSolver3D`` timed (``_solver3d_kernels``: begin_step,
-predict_residual, assemble_pressure, correct_pressure, courant_number, end_step; ``_multigrid3d_kernels``:
-mg_setup, gmres): CPU µs per cell and call, calls per step, µs per cell and step ("whole step": ``advance``;
-the rest of it is Python). Then GMRES is replayed on the first K corrections of those steps (repeated for
-at least 1 CPU second, after one untimed pass) and split, per iteration: ``mg_cycle`` alone as many times
+``--seconds`` of steps with every kernel call of ``GasSolver3D.advance`` timed (``_solver3d_kernels``:
+begin_step, newton_multigrid, courant_number, end_step; the Newton loop, with its residuals, Jacobian,
+hierarchy, GMRES solves and corrections, is one compiled call): CPU µs per cell and call, calls per step, µs
+per cell and step ("whole step": ``advance``; the rest of it is Python). Then the first pressure corrections
+of the next K steps are kept (``keeping_corrections``, untimed) and replayed (repeated for at least 1 CPU
+second, after one untimed pass): ``mg_setup`` per call, and GMRES split per iteration: ``mg_cycle`` alone as many times
 as GMRES iterated, ``mg_matvec`` once more (the products, and the true residual's), the Krylov part (the
 rest: Gram-Schmidt, the updates of x), and the cycle level by level ("down": the sweeps before the coarse
 correction and the restriction, one pass; "up": the prolongation and the sweeps after it; Python drives
@@ -48,6 +51,9 @@ the level loop there, which adds a few µs per call to the small levels).
 from __future__ import annotations
 
 import argparse
+import contextlib
+import inspect
+import math
 import time
 
 import harness  # benchmarks/harness.py: this script's folder is first on sys.path
@@ -123,36 +129,76 @@ def time_one(grid: str, seconds: float, warmup: int, linear_solver: str = "auto"
             "cells": nx * ny * nz}
 
 
-def capture(grid: str, warmup: int, count: int) -> tuple[list, np.ndarray, np.ndarray, object]:
-    """The bed on ``grid`` run ``warmup`` steps, then until ``count`` pressure corrections were solved: their
-    (matrix data, right-hand side, target), the CSC pattern and the solver's multigrid arrays."""
-    from fluidem.gas import _multigrid3d_kernels as MK
+@contextlib.contextmanager
+def keeping_corrections(kept: list, count: int):
+    """While inside, the first pressure correction of each step of a 3D ``GasSolver`` on the multigrid path is
+    appended to ``kept`` as (matrix data, right-hand side, target), until ``count`` are kept.
 
+    The Newton iterations run in one compiled call (``_solver3d_kernels.newton_multigrid``), so the correction is
+    taken around that call: its first residual is evaluated beforehand with the same arrays (``predict_residual``
+    sets the face velocities and the residuals from the pressure alone, so the call repeats it to the same bits),
+    its right-hand side (−R, row 0 zero where the pressure level is pinned) and GMRES target (as the loop computes
+    it) kept, and the Jacobian it assembled read back afterwards from ``data``: the loop's first iteration
+    assembles it and makes the hierarchy, and later iterations of the step keep it (chord steps) unless GMRES
+    fails on it. A step that converged without a correction, or assembled more than once, is not kept."""
+    from fluidem.gas import solver3d as S3
+
+    K3 = S3.K3
+    newton = K3.newton_multigrid
+    names = list(inspect.signature(newton.py_func).parameters)
+
+    def kept_first(*args):
+        a = dict(zip(names, args))
+        if len(kept) >= count:
+            return newton(*args)
+        rel = K3.predict_residual(a["W"], a["C"], a["F"], a["K"], a["row_of"], a["R"], a["fpar"], a["ipar"], a["out"])
+        b = -a["R"]
+        if a["pinned"]:
+            b[0] = 0.0
+        target = max(a["reduction"] * float(np.linalg.norm(b)),
+                     a["floor_factor"] * float(a["out"][K3.O_QREF]) / math.sqrt(b.size))
+        made = int(a["counts"][0])
+        result = newton(*args)
+        if rel > a["tolerance"] and int(a["counts"][0]) == made + 1:
+            kept.append((a["data"].copy(), b, target))
+        return result
+
+    K3.newton_multigrid = kept_first
+    try:
+        yield kept
+    finally:
+        K3.newton_multigrid = newton
+
+
+def capture(grid: str, warmup: int, count: int) -> tuple[list, np.ndarray, np.ndarray, object]:
+    """The bed on ``grid`` run ``warmup`` steps, then until ``count`` pressure corrections were kept
+    (``keeping_corrections``): their (matrix data, right-hand side, target), the CSC pattern and the solver's
+    multigrid arrays."""
     nx, ny, nz = (int(k) for k in grid.split("x"))
     solver, state, step_args, dt = bed_problem(nx, ny, nz, "multigrid")
     t = 0.0
     for _ in range(warmup):
         solver.advance(state, dt, t, **step_args(state, t, dt))
         t += dt
-    kept, gmres = [], MK.gmres
-
-    def keep(*args):  # GasSolver3D._solve calls MK.gmres(..., rhs, dp, target, max_iter)
-        kept.append((solver.MAT[0].copy(), args[-4].copy(), float(args[-2])))
-        return gmres(*args)
-
-    MK.gmres = keep
-    try:
-        while len(kept) < count:
+    kept = []
+    with keeping_corrections(kept, count):
+        for _ in range(100 * count):  # a step without a kept correction is rare; give up rather than loop on
+            if len(kept) >= count:
+                break
             solver.advance(state, dt, t, **step_args(state, t, dt))
             t += dt
-    finally:
-        MK.gmres = gmres
-    return kept[:count], solver._indices, solver._indptr, solver._mg
+    if len(kept) < count:
+        raise RuntimeError(f"{grid}: {len(kept)} of {count} pressure corrections kept in {100 * count} steps")
+    return kept, solver._indices, solver._indptr, solver._mg
 
 
 def solve_matrices(grid: str, warmup: int, count: int, repeat: int) -> list[list]:
-    """Rows of the ``--matrices`` table for ``grid``."""
-    import pyamg
+    """Rows of the ``--matrices`` table for ``grid`` (without pyamg installed, fluidem's row alone)."""
+    try:
+        import pyamg
+    except ImportError:
+        pyamg = None
+        print("pyamg is not installed: its rows are left out (pip install pyamg)")
     import scipy.sparse as sp
     import scipy.sparse.linalg as spla
 
@@ -194,11 +240,12 @@ def solve_matrices(grid: str, warmup: int, count: int, repeat: int) -> list[list
             xs.append(y)
         return its, xs
 
-    variants = {"fluidem multigrid + GMRES": lambda: ours(),
-                "pyamg SA + GMRES, setup+solve": lambda: amg("gmres", False),
-                "pyamg SA + BiCGStab, setup+solve": lambda: amg("bicgstab", False),
-                "pyamg SA + GMRES, one setup for all": lambda: amg("gmres", True),
-                "pyamg SA + BiCGStab, one setup for all": lambda: amg("bicgstab", True)}
+    variants = {"fluidem multigrid + GMRES": lambda: ours()}
+    if pyamg is not None:
+        variants.update({"pyamg SA + GMRES, setup+solve": lambda: amg("gmres", False),
+                         "pyamg SA + BiCGStab, setup+solve": lambda: amg("bicgstab", False),
+                         "pyamg SA + GMRES, one setup for all": lambda: amg("gmres", True),
+                         "pyamg SA + BiCGStab, one setup for all": lambda: amg("bicgstab", True)})
     times = {k: [] for k in variants}
     result = {}
     for r in range(repeat):
@@ -215,8 +262,8 @@ def solve_matrices(grid: str, warmup: int, count: int, repeat: int) -> list[list
 
 
 def kernel_split(grid: str, seconds: float, warmup: int, count: int) -> list[list]:
-    """Rows of the ``--kernels`` table for ``grid``: CPU µs per cell of each kernel call of a step, and of
-    the parts of ``MK.gmres`` replayed on ``count`` kept pressure corrections."""
+    """Rows of the ``--kernels`` table for ``grid``: CPU µs per cell of each kernel call of a step, then of
+    ``mg_setup`` and the parts of ``MK.gmres`` replayed on ``count`` pressure corrections kept afterwards."""
     from fluidem.gas import _multigrid3d_kernels as MK
     from fluidem.gas import solver3d as S3
     from fluidem.gas.solver import KRYLOV_MAX
@@ -228,15 +275,13 @@ def kernel_split(grid: str, seconds: float, warmup: int, count: int) -> list[lis
     for _ in range(warmup):
         solver.advance(state, dt, t, **step_args(state, t, dt))
         t += dt
-    cpu, calls, kept, saved = {}, {}, [], []
+    cpu, calls, saved = {}, {}, []
 
     def wrap(mod, name):
         f = getattr(mod, name)
         saved.append((mod, name, f))
 
         def timed_call(*args):
-            if name == "gmres" and len(kept) < count:
-                kept.append((solver.MAT[0].copy(), args[-4].copy(), float(args[-2])))
             c0 = time.process_time()
             r = f(*args)
             cpu[name] = cpu.get(name, 0.0) + time.process_time() - c0
@@ -245,10 +290,10 @@ def kernel_split(grid: str, seconds: float, warmup: int, count: int) -> list[lis
 
         setattr(mod, name, timed_call)
 
-    for mod, names in ((S3.K3, ("begin_step", "predict_residual", "assemble_pressure", "correct_pressure",
-                                "courant_number", "end_step")), (S3.MK, ("mg_setup", "gmres"))):
-        for name in names:
-            wrap(mod, name)
+    # the kernels ``advance`` calls on the multigrid path; the Newton loop (residuals, the Jacobian, the hierarchy,
+    # GMRES, the corrections) is one compiled call
+    for name in ("begin_step", "newton_multigrid", "courant_number", "end_step"):
+        wrap(S3.K3, name)
     steps, whole = 0, 0.0
     try:
         wall0 = time.perf_counter()
@@ -266,6 +311,13 @@ def kernel_split(grid: str, seconds: float, warmup: int, count: int) -> list[lis
     for name in sorted(cpu, key=lambda k: -cpu[k]):
         rows.append([grid, n, name, 1e6 * cpu[name] / (n * calls[name]), calls[name] / steps,
                      1e6 * cpu[name] / (n * steps)])
+    kept = []
+    with keeping_corrections(kept, count):  # the next steps, untimed
+        for _ in range(100 * count):
+            if len(kept) >= count:
+                break
+            solver.advance(state, dt, t, **step_args(state, t, dt))
+            t += dt
     # GMRES replayed: the whole solve, then its iterations' cycles and matrix products alone
     mg = solver._mg
     x = np.zeros(n)
@@ -273,7 +325,9 @@ def kernel_split(grid: str, seconds: float, warmup: int, count: int) -> list[lis
     def replay(part):
         its_all = 0
         for data, b, target in kept:
+            c0 = time.process_time()
             MK.mg_setup(data, mg.ell, mg.MGL, mg.MGI, mg.MGA, mg.MGS, mg.MGW, mg.DLU, mg.PIV)
+            part["mg_setup"] = part.get("mg_setup", 0.0) + time.process_time() - c0
             c0 = time.process_time()
             its = MK.gmres(mg.MGL, mg.MGI, mg.MGA, mg.MGS, mg.MGW, mg.DLU, mg.PIV, mg.KRY, mg.HES, b, x, target,
                            KRYLOV_MAX)
@@ -300,6 +354,7 @@ def kernel_split(grid: str, seconds: float, warmup: int, count: int) -> list[lis
         passes += 1
     part["krylov"] = part["gmres"] - part["cycle"] - part["matvec"]
     k = max(its_all, 1)
+    rows.append([grid, n, "mg_setup replayed", 1e6 * part["mg_setup"] / (n * passes * len(kept)), "per call", None])
     rows.append([grid, n, f"gmres replayed ({its_all / (passes * len(kept)):.1f} it/solve)", 1e6 * part["gmres"] / (n * k), "per it",
                  None])
     for name in ["cycle", "matvec", "krylov"] + [f"level {l} {w}" for l in range(levels)

@@ -420,8 +420,8 @@ def mg_matvec(MGL, MGI, MGA, x, y):
 
 @njit(cache=True, error_model="numpy")
 def gmres(MGL, MGI, MGA, MGS, MGW, DLU, PIV, KRY, HES, b, x, target, max_iter):
-    """x ≈ A^-1 b by restarted GMRES with the V-cycle as right preconditioner, from x = 0, until
-    ||b - A x||_2 <= target. Returns the iterations made, or -1 when ``max_iter`` were not enough."""
+    """x ≈ A^-1 b by restarted GMRES with the multigrid cycle (``mg_cycle``) as right preconditioner, from x = 0,
+    until ||b - A x||_2 <= target. Returns the iterations made, or -1 when ``max_iter`` were not enough."""
     n = b.size
     m = HES.shape[1] - 1
     Vb = KRY[: m + 1]

@@ -159,21 +159,11 @@ def fill_centre_ghosts(q, flags, rule, fixed, nx, ny, nz):
     """Boundary-cell values of a centre scalar from the flags: ``rule[flag]`` is R_COPY (adjacent
     interior value), R_FIXED (``fixed`` at that cell) or R_WRAP (opposite side). The cells on the
     ring's edges and corners (no condition of their own): wrapped along a periodic axis, else the
-    mean of the two (three) ring cells beside them, as the 2D corners."""
+    mean of the two (three) ring cells beside them, as the 2D corners. q, flags and fixed: C-contiguous
+    arrays of the padded shape (nx + 2, ny + 2, nz + 2)."""
     N = (nx, ny, nz)
     for a in range(3):
-        na, nb, nc = N[a], N[(a + 1) % 3], N[(a + 2) % 3]
-        for s in range(1, nb + 1):
-            for t in range(1, nc + 1):
-                for hi in range(2):
-                    g = at(a, na + 1 if hi else 0, s, t)
-                    r = rule[flags[g]]
-                    if r == R_COPY:
-                        q[g] = q[at(a, na if hi else 1, s, t)]
-                    elif r == R_FIXED:
-                        q[g] = fixed[g]
-                    elif r == R_WRAP:
-                        q[g] = q[at(a, 1 if hi else na, s, t)]
+        _centre_face_ghosts(q, flags, rule, fixed, a, nx, ny, nz)
     per = (flags[0, 1, 1] == PERIODIC, flags[1, 0, 1] == PERIODIC, flags[1, 1, 0] == PERIODIC)
     for c in range(3):  # edges along axis c
         a, b = (c + 1) % 3, (c + 2) % 3
@@ -204,6 +194,38 @@ def fill_centre_ghosts(q, flags, rule, fixed, nx, ny, nz):
                     q[px, py, pz] = q[px, py, wz]
                 else:
                     q[px, py, pz] = (q[ix, py, pz] + q[px, iy, pz] + q[px, py, iz]) / 3.0
+
+
+@njit(cache=True, error_model="numpy")
+def _centre_face_ghosts(q, flags, rule, fixed, a, nx, ny, nz):
+    """The boundary cells of ``fill_centre_ghosts`` on the two faces normal to axis ``a`` (not their edges),
+    addressed by flat offsets in q, flags and fixed (strides of the axes a, e1, e2): the same values as with
+    (x, y, z) indices, each read from interior cells only, without a branch on the axis per cell."""
+    N = (nx, ny, nz)
+    Q = q.ravel()  # views: the arrays are C-contiguous
+    G = flags.ravel()
+    X = fixed.ravel()
+    st = (q.shape[1] * q.shape[2], q.shape[2], 1)
+    e1, e2 = (a + 1) % 3, (a + 2) % 3
+    n, sd, s1, s2 = N[a], st[a], st[e1], st[e2]
+    for s in range(1, N[e1] + 1):
+        for t in range(1, N[e2] + 1):
+            b = s * s1 + t * s2
+            lo, hi = b, b + (n + 1) * sd
+            r = rule[G[lo]]
+            if r == R_COPY:
+                Q[lo] = Q[b + sd]
+            elif r == R_FIXED:
+                Q[lo] = X[lo]
+            elif r == R_WRAP:
+                Q[lo] = Q[b + n * sd]
+            r = rule[G[hi]]
+            if r == R_COPY:
+                Q[hi] = Q[b + n * sd]
+            elif r == R_FIXED:
+                Q[hi] = X[hi]
+            elif r == R_WRAP:
+                Q[hi] = Q[b + sd]
 
 
 @njit(cache=True, error_model="numpy")

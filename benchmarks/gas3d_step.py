@@ -180,6 +180,13 @@ def capture(grid: str, warmup: int, count: int) -> tuple[list, np.ndarray, np.nd
     for _ in range(warmup):
         solver.advance(state, dt, t, **step_args(state, t, dt))
         t += dt
+    kept, _ = keep_next(grid, solver, state, step_args, dt, t, count)
+    return kept, solver._indices, solver._indptr, solver._mg
+
+
+def keep_next(grid: str, solver, state, step_args, dt: float, t: float, count: int) -> tuple[list, float]:
+    """The bed's next steps from time ``t`` until ``count`` pressure corrections were kept
+    (``keeping_corrections``): (the kept corrections, the time reached)."""
     kept = []
     with keeping_corrections(kept, count):
         for _ in range(100 * count):  # a step without a kept correction is rare; give up rather than loop on
@@ -189,7 +196,7 @@ def capture(grid: str, warmup: int, count: int) -> tuple[list, np.ndarray, np.nd
             t += dt
     if len(kept) < count:
         raise RuntimeError(f"{grid}: {len(kept)} of {count} pressure corrections kept in {100 * count} steps")
-    return kept, solver._indices, solver._indptr, solver._mg
+    return kept, t
 
 
 def solve_matrices(grid: str, warmup: int, count: int, repeat: int) -> list[list]:
@@ -311,13 +318,7 @@ def kernel_split(grid: str, seconds: float, warmup: int, count: int) -> list[lis
     for name in sorted(cpu, key=lambda k: -cpu[k]):
         rows.append([grid, n, name, 1e6 * cpu[name] / (n * calls[name]), calls[name] / steps,
                      1e6 * cpu[name] / (n * steps)])
-    kept = []
-    with keeping_corrections(kept, count):  # the next steps, untimed
-        for _ in range(100 * count):
-            if len(kept) >= count:
-                break
-            solver.advance(state, dt, t, **step_args(state, t, dt))
-            t += dt
+    kept, t = keep_next(grid, solver, state, step_args, dt, t, count)  # the next steps, untimed
     # GMRES replayed: the whole solve, then its iterations' cycles and matrix products alone
     mg = solver._mg
     x = np.zeros(n)

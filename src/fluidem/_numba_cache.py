@@ -12,9 +12,9 @@ slab count did not reach the cached ``rebuild``), and an upgraded installation k
 Numba's own that serve fluidem's files only: the same places (``NUMBA_CACHE_DIR`` when set, else the
 ``__pycache__`` beside the source, else the user-wide folder) with one stamp for all of them, a hash
 of every source file compiled code can depend on (``kernel_sources``). Any change to one of those
-files makes every cached kernel stale, and each is compiled again at its first call (one to two and a
-half minutes for a case). Editing orchestration modules (``simulation.py``, ``case.py``, the CLI, the
-writers) leaves the cache alone.
+files makes every cached kernel stale, and each is compiled again at its first call (two to four
+minutes for a case, docs/performance.md). Editing orchestration modules (``simulation.py``, ``case.py``,
+the CLI, the writers) leaves the cache alone.
 """
 from __future__ import annotations
 

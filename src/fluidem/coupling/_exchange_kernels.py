@@ -175,19 +175,20 @@ def gas_force_fields(u, v, voidage, rho, p, inv_dbar, dx, dy, pressure_force, ce
     ← u (linearly extrapolated) and, with ``pressure_force``, ∂p/∂x on x-faces; yfa (nx + 2, ny + 1, 2) ← v and
     ∂p/∂y on y-faces (xfa, yfa zeroed by the caller); dbar (nx + 2, ny + 2) ← 1/D̄ at the centres (copied), or
     (0, 0) for a monodisperse drag."""
-    pad(voidage, True, True, False, cen[:, :, 0])
-    pad(rho, True, True, False, cen[:, :, 1])
-    pad(u, False, True, True, xfa[:, :, 0])
-    pad(v, True, False, True, yfa[:, :, 0])
+    yes, no = np.bool_(True), np.bool_(False)  # run-time values: one compiled ``pad``, not one per combination
+    pad(voidage, yes, yes, no, cen[:, :, 0])
+    pad(rho, yes, yes, no, cen[:, :, 1])
+    pad(u, no, yes, yes, xfa[:, :, 0])
+    pad(v, yes, no, yes, yfa[:, :, 0])
     if pressure_force:
         nx, ny = voidage.shape
         gx = np.empty((nx + 1, ny))
         gy = np.empty((nx, ny + 1))
         face_gradients(p, dx, dy, gx, gy)
-        pad(gx, False, True, False, xfa[:, :, 1])
-        pad(gy, True, False, False, yfa[:, :, 1])
+        pad(gx, no, yes, no, xfa[:, :, 1])
+        pad(gy, yes, no, no, yfa[:, :, 1])
     if dbar.shape[0] > 0:
-        pad(inv_dbar, True, True, False, dbar)
+        pad(inv_dbar, yes, yes, no, dbar)
 
 
 @njit(cache=True, inline="always", error_model="numpy")

@@ -283,8 +283,8 @@ def kp3d(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv
     if n > CHUNK:
         return _kp_parallel(law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, idx, idy,
                             idz, min_voidage, px, py, pz, fold, kp, valid)
-    return _kp_range(0, n, law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, idx, idy, idz,
-                     min_voidage, px, py, pz, fold, kp, valid)
+    return _kp_range(np.int64(0), n, law, position, velocity, radius, volume, u, v, w, voidage, rho, mu, inv_dbar, idx,
+                     idy, idz, min_voidage, px, py, pz, fold, kp, valid)
 
 
 @njit(cache=True, error_model="numpy")
@@ -428,8 +428,8 @@ def _face_sums_parallel(position, velocity, volume, kp, ok, idx, idy, idz, px, p
         _face_slabs(c * CHUNK, min(n, (c + 1) * CHUNK), position, ok, idx, nx, px, fold, pair, bit, slabs)
     for s in prange(m):
         lo, hi = slab_bounds(s, m, nx)
-        _face_sums_slab(s, lo, hi, slabs, position, velocity, volume, kp, ok, idx, idy, idz, px, py, pz, fold, pair,
-                        AU, BU, AV, BV, AW, BW, KC, EU, EV, EW)
+        _face_sums_slab(np.int64(s), lo, hi, slabs, position, velocity, volume, kp, ok, idx, idy, idz, px, py, pz, fold,
+                        pair, AU, BU, AV, BV, AW, BW, KC, EU, EV, EW)
 
 
 @njit(cache=True, error_model="numpy")
@@ -535,8 +535,8 @@ def particle_forces3d(position, velocity, volume, kp, u, v, w, p, dx, dy, dz, px
         _forces_parallel(position, velocity, volume, kp, u, v, w, GX, GY, GZ, idx, idy, idz, px, py, pz, fold,
                          pressure_force, out, total)
     else:
-        _forces_range(0, n, position, velocity, volume, kp, u, v, w, GX, GY, GZ, idx, idy, idz, px, py, pz, fold,
-                      pressure_force, out, total)
+        _forces_range(np.int64(0), n, position, velocity, volume, kp, u, v, w, GX, GY, GZ, idx, idy, idz, px, py, pz,
+                      fold, pressure_force, out, total)
 
 
 @njit(cache=True, error_model="numpy")
@@ -589,5 +589,5 @@ def particle_forces_split3d(position, velocity, volume, kp, u, v, w, p, dx, dy, 
         _split_parallel(position, velocity, volume, kp, u, v, w, GX, GY, GZ, idx, idy, idz, px, py, pz, fold,
                         pressure_force, ext, damp, total)
     else:
-        _split_range(0, n, position, velocity, volume, kp, u, v, w, GX, GY, GZ, idx, idy, idz, px, py, pz, fold,
-                     pressure_force, ext, damp, total)
+        _split_range(np.int64(0), n, position, velocity, volume, kp, u, v, w, GX, GY, GZ, idx, idy, idz, px, py, pz,
+                     fold, pressure_force, ext, damp, total)

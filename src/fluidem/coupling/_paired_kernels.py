@@ -227,9 +227,8 @@ def deposit(law, position, velocity, radius, volume, u, v, voidage, rho, mu, inv
                            min_voidage,
                            px, py, fold, kp, valid)
     else:
-        bad = _kp_range(0, n, law, position, velocity, radius, volume, u, v, voidage, rho, mu, inv_dbar, idx, idy,
-                        min_voidage,
-                        px, py, fold, kp, valid)
+        bad = _kp_range(np.int64(0), n, law, position, velocity, radius, volume, u, v, voidage, rho, mu, inv_dbar, idx,
+                        idy, min_voidage, px, py, fold, kp, valid)
     solids = EU.shape[0] > 0
     if solids:
         EU[:, :] = 0.0
@@ -469,8 +468,8 @@ def particle_forces_split(position, velocity, volume, kp, u, v, p, dx, dy, px, p
         _split_parallel(position, velocity, volume, kp, u, v, p, 1.0 / dx, 1.0 / dy, px, py, fold, pressure_force,
                         dim2, ext, damp, total)
     else:
-        _split_range(0, n, position, velocity, volume, kp, u, v, p, 1.0 / dx, 1.0 / dy, px, py, fold, pressure_force,
-                     dim2, ext, damp, total)
+        _split_range(np.int64(0), n, position, velocity, volume, kp, u, v, p, 1.0 / dx, 1.0 / dy, px, py, fold,
+                     pressure_force, dim2, ext, damp, total)
 
 
 @njit(cache=True, inline="always")

@@ -547,13 +547,13 @@ def _volume_deposit(position, radius, scale, velocity, dx, dy, dz, px, py, pz, o
     if n > CHUNK:
         _volume_parallel(position, radius, scale, dx, dy, dz, nx, ny, nz, px, py, pz, nodes, stride, buf)
     else:
-        _volume_range(0, n, position, radius, scale, dx, dy, dz, nx, ny, nz, px, py, pz, nodes, stride, buf)
+        _volume_range(np.int64(0), n, position, radius, scale, dx, dy, dz, nx, ny, nz, px, py, pz, nodes, stride, buf)
     if n > CHUNK and slab_count(nx) > 1:
         _volume_add_parallel(position, radius, scale, velocity, dx, dy, dz, px, py, pz, nodes, stride, buf, out, ovx,
                              ovy, ovz, cn, cvx, cvy, cvz)
     else:
-        _volume_add(0, nx, np.int64(1), np.empty(0, np.int64), position, radius, scale, velocity, dx, dy, dz, px, py,
-                    pz, nodes, stride, buf, out, ovx, ovy, ovz, cn, cvx, cvy, cvz)
+        _volume_add(np.int64(0), nx, np.int64(1), np.empty(0, np.int64), position, radius, scale, velocity, dx, dy, dz,
+                    px, py, pz, nodes, stride, buf, out, ovx, ovy, ovz, cn, cvx, cvy, cvz)
 
 
 @njit(cache=True)
@@ -623,11 +623,11 @@ def centroid_deposit3d(position, weight, velocity, dx, dy, dz, out, ovx, ovy, ov
     if n > CHUNK:
         _centroid_parallel(position, dx, dy, dz, nx, ny, nz, cells)
     else:
-        _centroid_range(0, n, position, dx, dy, dz, nx, ny, nz, cells)
+        _centroid_range(np.int64(0), n, position, dx, dy, dz, nx, ny, nz, cells)
     if n > CHUNK and slab_count(nx) > 1:
         _centroid_add_parallel(n, weight, velocity, cells, out, ovx, ovy, ovz)
     else:
-        _centroid_add(0, nx, n, weight, velocity, cells, out, ovx, ovy, ovz)
+        _centroid_add(np.int64(0), nx, n, weight, velocity, cells, out, ovx, ovy, ovz)
 
 
 @njit(cache=True)

@@ -372,7 +372,7 @@ def mg_cycle(MGL, MGI, MGA, MGS, MGW, DLU, PIV, b, x):
         for g in range(b.size):
             x[g] = X[g]
         return
-    l = 0
+    l = np.int64(0)  # a run-time integer: with a literal 0 the level-0 calls would compile once more for it
     VISITS[0] = 0.0
     down = True
     while True:
@@ -383,7 +383,7 @@ def mg_cycle(MGL, MGI, MGA, MGS, MGW, DLU, PIV, b, x):
                 continue
             wrap = MGL[1, l] > 1 and MGI[MGL[0, l], MGI_NB] >= 0
             if l == 0:
-                _mg_presmooth_restrict(MGL, MGI, MGS, x, b, B, l, wrap, True)
+                _mg_presmooth_restrict(MGL, MGI, MGS, x, b, B, l, wrap, np.bool_(True))
             else:
                 _mg_presmooth_restrict(MGL, MGI, MGS, X, B, B, l, wrap, VISITS[l] == 0.0)
             l += 1

@@ -244,7 +244,7 @@ def fill_face_ghosts(W, flags, nx, ny, nz, threads):
         m = max(nx, max(ny, nz)) + 5
         for a in range(3):
             for q in range(3):
-                _face_ghost_lines(W, flags, a, q, 0, m, nx, ny, nz)
+                _face_ghost_lines(W, flags, a, q, np.int64(0), m, nx, ny, nz)
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
@@ -312,7 +312,7 @@ def update_density(C, rho_factor, rho_const, p_ref, threads):
     if threads > 1:
         _density_threads(C, rho_factor, rho_const, p_ref)
     else:
-        _density_planes(0, C.shape[1], C, rho_factor, rho_const, p_ref)
+        _density_planes(np.int64(0), C.shape[1], C, rho_factor, rho_const, p_ref)
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
@@ -357,7 +357,7 @@ def mass_fluxes(W, Q, C, K, flags, nx, ny, nz, threads):
     if threads > 1:
         _mass_flux_threads(W, Q, C, K, nx, ny, nz)
     else:
-        _mass_flux_planes(0, nx + 1, W, Q, C, K, nx, ny, nz)
+        _mass_flux_planes(np.int64(0), nx + 1, W, Q, C, K, nx, ny, nz)
     fill_face_ghosts(Q, flags, nx, ny, nz, threads)
 
 
@@ -394,7 +394,7 @@ def stresses(W, E, mu, hx, hy, hz, S, T, nx, ny, nz, threads):
     if threads > 1:
         _stress_threads(W, E, mu, hx, hy, hz, S, T, nx, ny, nz)
     else:
-        _stress_planes(-1, nx + 1, W, E, mu, hx, hy, hz, S, T, nx, ny, nz)
+        _stress_planes(np.int64(-1), nx + 1, W, E, mu, hx, hy, hz, S, T, nx, ny, nz)
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
@@ -447,7 +447,7 @@ def explicit_momentum(W, Q, C, K, F, S, T, fpar, ipar):
     if threads > 1:
         _explicit_threads(W, Q, K, F, S, T, hx, hy, hz, scheme, nx, ny, nz)
     else:
-        _explicit_planes(0, nx + 1, W, Q, K, F, S, T, hx, hy, hz, scheme, nx, ny, nz)
+        _explicit_planes(np.int64(0), nx + 1, W, Q, K, F, S, T, hx, hy, hz, scheme, nx, ny, nz)
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
@@ -500,7 +500,7 @@ def _outflow_shares(F, K, C, fpar, total, nx, ny, nz, threads):
     if threads > 1:
         _outflow_flow_threads(F, K, C, fpar, nx, ny, nz)
     else:
-        _outflow_flow_planes(0, nx + 1, F, K, C, fpar, nx, ny, nz)
+        _outflow_flow_planes(np.int64(0), nx + 1, F, K, C, fpar, nx, ny, nz)
     for a in range(3):
         ex, ey, ez = unit(a)
         area = fpar[FP_A + a]
@@ -566,7 +566,7 @@ def _face_constants(C, F, K, fpar, idt, nx, ny, nz, threads):
     if threads > 1:
         _face_constant_threads(C, F, K, fpar, idt, nx, ny, nz)
     else:
-        _face_constant_planes(0, nx + 1, C, F, K, fpar, idt, nx, ny, nz)
+        _face_constant_planes(np.int64(0), nx + 1, C, F, K, fpar, idt, nx, ny, nz)
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
@@ -652,7 +652,7 @@ def begin_step(p, rho, u, v, w, eps_old, eps_new, W, Q, C, F, K, S, T, flags, RU
     if threads > 1:
         _load_threads(p, rho, u, v, w, eps_old, W, C, F, p_ref, nx)
     else:
-        _load_planes(0, nx + 1, p, rho, u, v, w, eps_old, W, C, F, p_ref)
+        _load_planes(np.int64(0), nx + 1, p, rho, u, v, w, eps_old, W, C, F, p_ref)
     boundary_cells(C, C[C_PFIX_OLD], flags, RULES, fpar, ipar)
     fill_face_ghosts(W, flags, nx, ny, nz, threads)
     mass_fluxes(W, Q, C, K, flags, nx, ny, nz, threads)
@@ -664,7 +664,7 @@ def begin_step(p, rho, u, v, w, eps_old, eps_new, W, Q, C, F, K, S, T, flags, RU
     if threads > 1:
         _voidage_threads(eps_new, C, nx)
     else:
-        _voidage_planes(0, nx, eps_new, C)
+        _voidage_planes(np.int64(0), nx, eps_new, C)
     boundary_cells(C, C[C_PFIX], flags, RULES, fpar, ipar)
     _face_constants(C, F, K, fpar, 1.0 / fpar[FP_DT], nx, ny, nz, threads)
 
@@ -678,7 +678,7 @@ def end_step(p, rho, u, v, w, eps, eps_new, W, C, flags, fpar, ipar):
     if threads > 1:
         _store_threads(p, rho, u, v, w, eps, eps_new, W, C, fpar[FP_PREF], nx)
     else:
-        _store_planes(0, nx + 1, p, rho, u, v, w, eps, eps_new, W, C, fpar[FP_PREF])
+        _store_planes(np.int64(0), nx + 1, p, rho, u, v, w, eps, eps_new, W, C, fpar[FP_PREF])
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
@@ -719,7 +719,7 @@ def _face_fluxes(W, C, F, K, fpar, nx, ny, nz, threads):
     if threads > 1:
         has_outflow = _face_flux_threads(W, C, F, K, fpar, nx, ny, nz) > 0
     else:
-        has_outflow = _face_flux_planes(0, nx + 1, W, C, F, K, fpar, nx, ny, nz)
+        has_outflow = _face_flux_planes(np.int64(0), nx + 1, W, C, F, K, fpar, nx, ny, nz)
     for a in range(3):
         kind, FL = K[K_KIND, a], F[F_FLUX, a]
         na = nx if a == 0 else (ny if a == 1 else nz)
@@ -884,7 +884,7 @@ def predict_residual(W, C, F, K, row_of, R, fpar, ipar, out):
     if threads > 1:
         _residual_threads(C, F, R, vdt, nx, ny, nz)
     else:
-        _residual_planes(0, nx, C, F, R, vdt, ny, nz)
+        _residual_planes(np.int64(0), nx, C, F, R, vdt, ny, nz)
     acc = 0.0
     acc_abs = 0.0
     mass = 0.0
@@ -1010,7 +1010,7 @@ def correct_pressure(C, dp, flags, RULES, fpar, ipar):
     if threads > 1:
         _correction_threads(C, dp, nx, ny, nz)
     else:
-        _correction_planes(0, nx, C, dp, ny, nz)
+        _correction_planes(np.int64(0), nx, C, dp, ny, nz)
     fill_centre_ghosts(P, flags, RULES[RULE_P], C[C_PFIX], nx, ny, nz)
     update_density(C, fpar[FP_COMP], fpar[FP_RHOC], fpar[FP_PREF], threads)
 

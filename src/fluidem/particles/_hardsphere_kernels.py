@@ -108,7 +108,7 @@ def build_neighbours(pos, radius, skin, dim2):
     n = pos.shape[0]
     if n == 0:
         return np.zeros(1, dtype=np.int64), np.empty(0, dtype=np.int32)
-    row_start, partner, _, _ = build_pairs(pos, radius, skin, dim2)
+    row_start, partner, _, _ = build_pairs(pos, radius, skin, dim2, np.int64(0))
     return _full_list(n, row_start, partner)
 
 

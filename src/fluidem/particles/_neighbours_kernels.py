@@ -457,7 +457,7 @@ def contacts_first(pos, radius, row_start, partner, hist):
     in work items of ROWS_PER_ITEM rows on all threads.
     """
     n = row_start.shape[0] - 1
-    m = 0
+    m = np.int64(0)
     for i in range(n):
         m = max(m, row_start[i + 1] - row_start[i])
     for c in prange((n + ROWS_PER_ITEM - 1) // ROWS_PER_ITEM):
@@ -699,13 +699,13 @@ def build_pairs_periodic(pos, radius, skin, dim2, period, box_lo, slabs=0):
     counts = np.zeros(n + 1, dtype=np.int64)
     none = np.empty(0, dtype=np.int32)
     for i in prange(n):
-        counts[i + 1] = _periodic_row(i, pos, radius, skin, period, ncell, cell_of, cstart, cmembers, slab, wrap,
-                                      none, True)
+        counts[i + 1] = _periodic_row(np.int64(i), pos, radius, skin, period, ncell, cell_of, cstart, cmembers, slab,
+                                      wrap, none, True)
     row_start = np.cumsum(counts)
     partner = np.empty(row_start[n], dtype=np.int32)
     for i in prange(n):
         row = partner[row_start[i]:row_start[i + 1]]
-        _periodic_row(i, pos, radius, skin, period, ncell, cell_of, cstart, cmembers, slab, wrap, row, False)
+        _periodic_row(np.int64(i), pos, radius, skin, period, ncell, cell_of, cstart, cmembers, slab, wrap, row, False)
         row.sort()
     return row_start, partner, slab_start, slab_members
 
@@ -714,7 +714,7 @@ def build_pairs_periodic(pos, radius, skin, dim2, period, box_lo, slabs=0):
 def contacts_first_periodic(pos, radius, row_start, partner, hist, period):
     """``contacts_first`` with distances between nearest images (a box with periodic sides)."""
     n = row_start.shape[0] - 1
-    m = 0
+    m = np.int64(0)
     for i in range(n):
         m = max(m, row_start[i + 1] - row_start[i])
     for c in prange((n + ROWS_PER_ITEM - 1) // ROWS_PER_ITEM):

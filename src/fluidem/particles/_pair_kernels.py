@@ -124,11 +124,12 @@ def make_work(pp, row_start, hist, slab_start, slab_members, nthreads):
         for b in range(pp.shape[1]):
             ext |= (pp[a, b, SLOT_ROLLING_FRICTION] != 0.0) | (pp[a, b, SLOT_EXTENDED] != 0.0)
     if uniform:
-        for t in range(nthreads):
+        chunk = G.shape[1] // N_G  # CHUNK, as a run-time value: with the constant LLVM unrolled these loops whole
+        for t in range(nthreads):  # (N_SLOTS × 128 stores), which took ~20 s to compile
             for q in range(N_SLOTS):
                 v = pp[0, 0, q]
-                for c in range(CHUNK):
-                    G[t, (G_LAW + q) * CHUNK + c] = v
+                for c in range(chunk):
+                    G[t, (G_LAW + q) * chunk + c] = v
     return cbuf, ibuf, G, out, touch, uniform, ext
 
 

@@ -153,7 +153,7 @@ def _chunk_forces_parallel(state, pp, lists, hist, dt, update, sum_f, sum_c, blo
     for phase in range(2):
         for k in prange(nthreads):
             chunk_run(block[k] + (block[k] + phase) % 2, block[k + 1], flat, state, pp, lists, hist, dt, update,
-                      sum_f, sum_c, work, k, period)
+                      sum_f, sum_c, work, np.int64(k), period)
 
 
 @njit(cache=True, error_model="numpy")
@@ -164,7 +164,7 @@ def _chunk_forces(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat,
         return
     nslab = lists[2].shape[0] - 1
     for phase in range(2):
-        chunk_run(phase, nslab, flat, state, pp, lists, hist, dt, update, sum_f, sum_c, work, 0, period)
+        chunk_run(phase, nslab, flat, state, pp, lists, hist, dt, update, sum_f, sum_c, work, np.int64(0), period)
 
 
 @njit(cache=True, error_model="numpy")
@@ -534,7 +534,7 @@ def near_walls(ref_pos, radius, wall_motion, wall_point0, wall_normal, skin, dim
         _near_parallel(first, ref_pos, radius, wall_point0, wall_normal, moving, reach, wall_hist, wall_touch,
                        near_count, near_wall)
     else:
-        _near_range(0, ref_pos.shape[0], ref_pos, radius, wall_point0, wall_normal, moving, reach, wall_hist,
+        _near_range(np.int64(0), ref_pos.shape[0], ref_pos, radius, wall_point0, wall_normal, moving, reach, wall_hist,
                     wall_touch, near_count, near_wall)
 
 
@@ -636,12 +636,13 @@ def gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_
                                 wall_touch, near_count, near_wall, gravity, ext_force, ext_damping, has_ext, dim2, sum_f,
                                 sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2, first, flat)
     if flat:
-        return _gather_range_flat(0, n, pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_axis,
-                                  wall_hist, wall_touch, near_count, near_wall, gravity, ext_force, ext_damping, has_ext,
-                                  dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2)
-    return _gather_range(0, n, pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_axis, wall_hist,
-                         wall_touch, near_count, near_wall, gravity, ext_force, ext_damping, has_ext, dim2, sum_f, sum_c,
-                         dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2)
+        return _gather_range_flat(np.int64(0), n, pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal,
+                                  wall_axis, wall_hist, wall_touch, near_count, near_wall, gravity, ext_force,
+                                  ext_damping, has_ext, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia,
+                                  mode, ref_pos, limit2)
+    return _gather_range(np.int64(0), n, pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_axis,
+                         wall_hist, wall_touch, near_count, near_wall, gravity, ext_force, ext_damping, has_ext, dim2,
+                         sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2)
 
 
 @njit(cache=True, error_model="numpy")
@@ -781,8 +782,8 @@ def compute_forces(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, 
     pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
                 dt, update, sum_f, sum_c, block, flat, make_work(pp, row_start, hist, slab_start, slab_members, nthreads),
                 period)
-    shape_forces(shapes, pos, pos, vel, omega, radius, mass, species, species, True, -1, t, dt, update, flat, sum_f,
-                 sum_c)
+    shape_forces(shapes, pos, pos, vel, omega, radius, mass, species, species, np.bool_(True), np.int64(-1), t, dt,
+                 update, flat, sum_f, sum_c)
     if has_bodies(shapes):  # the free bodies' force and torque for their first half kick
         body_loads(shapes[3], shapes[18])
     near_count, near_wall = all_walls(pos.shape[0], wall_normal.shape[0])

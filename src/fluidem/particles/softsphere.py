@@ -161,7 +161,7 @@ class SoftSphereEngine(ParticleEngine):
         st = self.state
         if self.periodic:
             return build_pairs_periodic(st.position, st.radius, skin, self.dim2, self.period, self.box_lo)
-        return build_pairs(st.position, st.radius, skin, self.dim2)
+        return build_pairs(st.position, st.radius, skin, self.dim2, 0)  # the signature advance compiles
 
     def _check_pull_off(self) -> None:
         """An adhesive contact lasts until its pull-off distance, so the Verlet list must keep pairs (and the
@@ -182,8 +182,10 @@ class SoftSphereEngine(ParticleEngine):
         self.wall_touch = np.empty((n, nw), dtype=np.bool_)
         self.near_count = np.empty(n, dtype=np.int64)
         self.near_wall = np.empty((n, nw), dtype=np.int64)
+        # one thread's range, [0, n], as advance passes ranges: the specialisation advance compiles anyway
         K.near_walls(self.ref_pos, self.state.radius, self.wall_motion, self.wall_point0, self.wall_normal, self.skin,
-                     self.dim2, self.wall_hist, self.wall_touch, self.near_count, self.near_wall)
+                     self.dim2, self.wall_hist, self.wall_touch, self.near_count, self.near_wall,
+                     np.array([0, n], dtype=np.int64))
 
     def _renumber(self) -> None:
         """At set-up, before the list is made: number the particles in slab and cell order (as ``advance``

@@ -462,7 +462,8 @@ class SoftSphereGPUEngine(SoftSphereEngine):
         st = self.state
         out = {f"state/{k}": np.array(v) for k, v in st.arrays().items()}
         ref_pos = self.ref_pos
-        row_start, partner, slab_start, slab_members = build_pairs(ref_pos, out["state/radius"], self.skin, self.dim2)
+        row_start, partner, slab_start, slab_members = build_pairs(ref_pos, out["state/radius"], self.skin, self.dim2,
+                                                                   0)
         count, nbr, fhist = self._host_list()
         hist = half_history(row_start, partner, count, nbr, fhist)
         contacts_first(ref_pos, out["state/radius"], row_start, partner, hist)  # the CPU's row order after a build

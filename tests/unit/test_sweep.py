@@ -259,17 +259,29 @@ def wait_for_first_member(proc, study: Path, timeout: float = 90.0) -> str:
     pytest.fail("no member finished in time")
 
 
+def killed_while_a_member_runs(tmp_path, until: str, attempts: int = 3):
+    """A sweep killed (SIGKILL) once its first member has completed and its second is running with a checkpoint:
+    (study, the completed member, every member's state after the kill). The kill can land just after the
+    running member ended (it steps for a fraction of a second): then the sweep is started afresh, up to
+    ``attempts`` times, so that a member killed while running is there to resume."""
+    for attempt in range(attempts):
+        study = tmp_path / f"study{attempt}"
+        proc = start_sweep(study, until, tmp_path)
+        first = wait_for_first_member(proc, study)
+        proc.send_signal(signal.SIGKILL)
+        proc.communicate(timeout=30)
+        time.sleep(1.5)  # the worker processes see their parent gone and exit
+        states = {d.name: member_state(d).status for d in study.glob("restitution=*")}
+        if "interrupted" in states.values():
+            return study, first, states
+    pytest.fail(f"in {attempts} sweeps the kill never landed while a member ran: {states}")
+
+
 def test_killed_sweep_resumes_without_rerunning_finished_members(tmp_path):
-    study = tmp_path / "study"
-    proc = start_sweep(study, "0.1", tmp_path)
-    first = wait_for_first_member(proc, study)
-    proc.send_signal(signal.SIGKILL)
-    proc.communicate(timeout=30)
+    study, first, states = killed_while_a_member_runs(tmp_path, "0.4")
     kept = {p: (study / first / p).stat().st_mtime_ns for p in ("summary.json", "restart.h5", "probes.csv")}
-    states = {d.name: member_state(d).status for d in study.glob("restitution=*")}
     assert states[first] == "completed" and list(states.values()).count("completed") < 3
-    time.sleep(1.5)  # the worker processes see their parent gone and exit
-    rerun = start_sweep(study, "0.1", tmp_path)
+    rerun = start_sweep(study, "0.4", tmp_path)
     out, err = rerun.communicate(timeout=120)
     assert rerun.returncode == 0, err
     assert {p: (study / first / p).stat().st_mtime_ns for p in kept} == kept
@@ -278,7 +290,7 @@ def test_killed_sweep_resumes_without_rerunning_finished_members(tmp_path):
     assert out.splitlines()[0].startswith("member,") and len(out.splitlines()) == 4
     # a member killed while running went on from its checkpoint to the run it would have been
     name = next(n for n, s in states.items() if s == "interrupted")
-    rc, _, err = cli(["run", "pour", "--until", "0.1", "--threads", "1", "--quiet", "--out", tmp_path / "alone",
+    rc, _, err = cli(["run", "pour", "--until", "0.4", "--threads", "1", "--quiet", "--out", tmp_path / "alone",
                       "--set", f"particles.contact.restitution={name.split('=')[1]}"])
     assert rc == 0, err
     assert_same_run(study / name, tmp_path / "alone")

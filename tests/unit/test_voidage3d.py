@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from fluidem.coupling import voidage as V
-from fluidem.coupling._voidage3d_kernels import corner_volume, sphere_box_volume
+from fluidem.coupling._voidage3d_kernels import corner_volume, octant_volume, sphere_box_volume
 from fluidem.gas.grid import StaggeredGrid
 
 D = 4e-3
@@ -55,6 +55,37 @@ def test_closed_forms():
     a, b, c = 0.11, -0.23, 0.31
     vals = [corner_volume(*p, r) for p in ((a, b, c), (b, c, a), (c, a, b), (b, a, c))]
     assert max(vals) - min(vals) < 1e-15 * full
+
+
+def test_octant_volume_against_quadrature():
+    """octant_volume(a, b, c) = ∫∫ (√(r² − x² − y²) − c) dy dx over x > a, y > b, x² + y² < r² − c², by SciPy's
+    adaptive quadrature (an evaluation independent of the closed form and of its sums of arctangents) to 1e-11
+    of the sphere: random bounds; c = 0 (the closed form's upper end alone); a = 0 and a = b = 0 (where the
+    summed angles meet their edge cases); bounds just inside the rim; bounds of 1e-6 r."""
+    dblquad = pytest.importorskip("scipy.integrate").dblquad
+    r = 0.7
+    full = 4.0 / 3.0 * math.pi * r**3
+    rng = np.random.default_rng(11)
+    cases = [(0.0, 0.0, 0.0), (0.0, 0.0, 0.3), (0.0, 0.25, 0.0), (0.0, 0.25, 0.4), (0.3, 0.3, 0.3),
+             (1e-6 * r, 2e-6 * r, 1e-6 * r)]
+    while len(cases) < 30:
+        a, b, c = rng.uniform(0.0, r, 3)
+        if len(cases) % 3 == 0:
+            c = 0.0
+        if len(cases) % 5 == 0:  # just inside the rim
+            scale = 0.99 * r / math.sqrt(a * a + b * b + c * c)
+            a, b, c = a * scale, b * scale, c * scale
+        if a * a + b * b + c * c < r * r:
+            cases.append((a, b, c))
+    for a, b, c in cases:
+        h = r * r - c * c
+        ref, err = dblquad(lambda y, x: math.sqrt(max(r * r - x * x - y * y, 0.0)) - c, a, math.sqrt(h - b * b),
+                           lambda x: b, lambda x: math.sqrt(max(h - x * x, b * b)), epsabs=1e-14 * full, epsrel=1e-13)
+        assert err < 1e-12 * full
+        got = octant_volume(a, b, c, r)
+        assert abs(got - ref) < 1e-11 * full, (a, b, c, got, ref)
+        assert corner_volume(a, b, c, r) == got
+    assert octant_volume(0.5, 0.5, 0.0, r) == 0.0  # a² + b² ≥ r²: nothing of the sphere
 
 
 def test_sphere_box_volume_within_a_bounding_raster():

@@ -60,20 +60,29 @@ CHUNK = 256  # particles per work item of the parallel passes
 
 @njit(cache=True, inline="always")
 def _corner_primitive(z, a, b, r, wa, wb):
-    """Antiderivative in z of the quadrant area Q of the module docstring (a, b ≥ 0), at z with
-    wa = √(r² − a² − z²), wb = √(r² − b² − z²) given (exact at the upper end, where they are b and a)."""
+    """Antiderivative in z of the quadrant area Q of the module docstring (a, b ≥ 0), at z ≥ 0 with
+    wa = √(r² − a² − z²), wb = √(r² − b² − z²) given (exact at the upper end, where they are b and a).
+
+    The two axes' asin(q/ρ) terms share the factor −½p and their atan terms the factor r³/3, so each pair
+    is taken as one angle: asin(a/ρ) + asin(b/ρ) = arg((wa + i a)(wb + i b)) and
+    atan(z a/(r wa)) + atan(z b/(r wb)) = arg((r wa + i z a)(r wb + i z b)), both sums in [0, π]: four
+    arctangents instead of six, three at the upper end (where the first sum is π/2). The product's parts
+    carry a rounding error below ε|z₁||z₂|, so each angle stays within a few ε of the sum of its two
+    arctangents."""
     p = r * r * z - z * z * z / 3.0  # ∫ (r² − z²) dz
-    out = 0.25 * math.pi * p + a * b * z
+    cross = a * wb + b * wa
+    real = wa * wb - a * b  # exactly 0 at the upper end (wa = b, wb = a): there the sum is π/2, no call
+    asq = 0.5 * math.pi if real == 0.0 and cross > 0.0 else math.atan2(cross, real)  # asin(a/ρ) + asin(b/ρ)
+    at = math.atan2(z * r * cross, r * r * wa * wb - z * z * a * b)
+    # −½ ∫ ρ² asin(q/ρ) dz by parts: −½ p asin(q/ρ) + r³/3 atan(z q/(r w)) here, ½ q j below, for both axes
+    out = 0.25 * math.pi * p + a * b * z - 0.5 * p * asq + r * r * r / 3.0 * at
     for k in range(2):
         q = a if k == 0 else b
         w = wa if k == 0 else wb
         s2 = r * r - q * q
         asz = math.atan2(z, w)  # asin(z/s)
-        asq = math.atan2(q, w)  # asin(q/ρ)
         j = (s2 * asz - z * w) / 6.0 - 2.0 * r * r / 3.0 * asz
-        # −½ ∫ ρ² asin(q/ρ) dz (by parts) and −½ q ∫ √(s² − z²) dz
-        out += -0.5 * p * asq + 0.5 * q * j + r * r * r / 3.0 * math.atan2(z * q, r * w)
-        out += -0.25 * q * (z * w + s2 * asz)
+        out += 0.5 * q * j - 0.25 * q * (z * w + s2 * asz)  # and −½ q ∫ √(s² − z²) dz
     return out
 
 

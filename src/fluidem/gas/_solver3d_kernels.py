@@ -153,6 +153,59 @@ def load_momentum_sources(F, a, us, source, n0, n1, n2):
                 F[F_RHS, a, i, j, k] = r
 
 
+
+@njit(cache=True, error_model="numpy")
+def _load_axis(F, a, b, us, source, n0, n1, n2):
+    """``load_beta`` and then ``load_momentum_sources`` on the faces of axis ``a`` (``b`` empty: β is not
+    loaded, F[F_BETA, a] stays as it is); returns False at the first β that is not finite and ≥ 0."""
+    if b.size > 0 and not load_beta(F, a, b):
+        return False
+    load_momentum_sources(F, a, us, source, n0, n1, n2)
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def load_face_inputs(F, b0, b1, b2, u0, u1, u2, s0, s1, s2, shapes):
+    """``_load_axis`` of the three axes in one call: β (b*), the solids velocity (u*) and the momentum source
+    (s*) on the x-, y- and z-faces, each an empty array where absent; ``shapes`` (3, 3) the face shapes.
+    Returns the first axis with a β out of range (not finite or < 0), or −1."""
+    if not _load_axis(F, np.int64(0), b0, u0, s0, shapes[0, 0], shapes[0, 1], shapes[0, 2]):
+        return 0
+    if not _load_axis(F, np.int64(1), b1, u1, s1, shapes[1, 0], shapes[1, 1], shapes[1, 2]):
+        return 1
+    if not _load_axis(F, np.int64(2), b2, u2, s2, shapes[2, 0], shapes[2, 1], shapes[2, 2]):
+        return 2
+    return -1
+
+
+@njit(cache=True, error_model="numpy")
+def unit_interval3(e0, e1, e2):
+    """The first of the three arrays with a value outside (0, 1] (``unit_interval``), or −1."""
+    if not unit_interval(e0):
+        return 0
+    if not unit_interval(e1):
+        return 1
+    if not unit_interval(e2):
+        return 2
+    return -1
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _load_face(F, field, a, e):
+    """F[field, a] = e on the faces of axis a (e of that axis's face shape)."""
+    for i in range(e.shape[0]):
+        for j in range(e.shape[1]):
+            for k in range(e.shape[2]):
+                F[field, a, i, j, k] = e[i, j, k]
+
+
+@njit(cache=True, error_model="numpy")
+def load_faces(F, field, e0, e1, e2):
+    """F[field, a] = e_a on the faces of each axis a (e_a of that axis's face shape)."""
+    _load_face(F, field, np.int64(0), e0)
+    _load_face(F, field, np.int64(1), e1)
+    _load_face(F, field, np.int64(2), e2)
+
 # ---------------------------------------------------------------------------- ghosts
 @njit(cache=True, error_model="numpy")
 def fill_centre_ghosts(q, flags, rule, fixed, nx, ny, nz):

@@ -285,7 +285,7 @@ class GasSolver3D(GasSolver):
         self._ipar[lay.I_PIN] = self.pin_diag
         self._out = np.zeros(lay.N_OUT)
         self._face_shapes = tuple(gd.face_shape(a) for a in range(3))
-        self._face_slices = tuple((a,) + tuple(slice(0, n) for n in self._face_shapes[a]) for a in range(3))
+        self._face_shape_table = np.array(self._face_shapes, np.int64)  # (3, 3), for ``K3.load_face_inputs``
         self._none = np.zeros((0, 0, 0))  # "no array" for the input kernels
         self._state_ok = None  # the state arrays _check_state found right (references)
         self.parallel_min_cells = PARALLEL_MIN_CELLS  # fewer cells: the kernels' passes serial on any threads
@@ -423,25 +423,24 @@ class GasSolver3D(GasSolver):
         raise CaseError(f"gas {name}: shape {a.shape} does not match {allowed}")
 
     def _load_inputs(self, beta, solids, sources) -> None:
-        """F[F_BETA] = β and F[F_RHS] = β w_s + source on the faces of every axis (``K3.load_beta``,
-        ``K3.load_momentum_sources``: no temporaries); CaseError when out of range."""
-        F = self.F
+        """F[F_BETA] = β and F[F_RHS] = β u_s + source on the faces of every axis, in one compiled call
+        (``K3.load_face_inputs``: no temporaries); CaseError when out of range."""
         per_face = isinstance(beta, (tuple, list))
         if per_face and len(beta) != 3:
             raise CaseError("gas beta: give a number, a centre array or three face arrays (x, y, z faces)")
         if beta is None:
-            F[lay.F_BETA] = 0.0
+            self.F[lay.F_BETA] = 0.0
         none = self._none
+        b, us, src = [none, none, none], [none, none, none], [none, none, none]
         for a in range(3):
-            us = none
             if beta is not None:
-                b = self._face(f"beta[{a}]", beta[a], a, centre_ok=False) if per_face else self._face("beta", beta, a)
-                if not K3.load_beta(F, a, b):
-                    raise CaseError("gas beta: must be finite and >= 0 [kg m^-3 s^-1] on every face")
+                b[a] = self._face(f"beta[{a}]", beta[a], a, centre_ok=False) if per_face else self._face("beta", beta, a)
                 if solids[a] is not None:  # the solids velocity counts only where β is given
-                    us = self._face(f"solids velocity {'uvw'[a]}", solids[a], a)
-            source = none if sources[a] is None else self._face(f"source {'uvw'[a]}", sources[a], a)
-            K3.load_momentum_sources(F, a, us, source, *self._face_shapes[a])
+                    us[a] = self._face(f"solids velocity {'uvw'[a]}", solids[a], a)
+            if sources[a] is not None:
+                src[a] = self._face(f"source {'uvw'[a]}", sources[a], a)
+        if K3.load_face_inputs(self.F, *b, *us, *src, self._face_shape_table) >= 0:
+            raise CaseError("gas beta: must be finite and >= 0 [kg m^-3 s^-1] on every face")
 
     def _check_state(self, state: GasState) -> None:
         """Shapes, dtype and layout of the state's arrays; arrays found right once are remembered (references)
@@ -472,9 +471,10 @@ class GasSolver3D(GasSolver):
             e = np.asarray(e, float)
             if e.shape != self._face_shapes[a]:
                 raise CaseError(f"gas pressure_voidage[{a}]: shape {e.shape}, expected {self.grid.face_shape(a)}")
-            if not K3.unit_interval(e):
-                raise CaseError(f"gas pressure_voidage[{a}]: every face value must lie in (0, 1]")
             out.append(e)
+        bad = K3.unit_interval3(*out)
+        if bad >= 0:
+            raise CaseError(f"gas pressure_voidage[{bad}]: every face value must lie in (0, 1]")
         return tuple(out)
 
     # ------------------------------------------------------------ time step
@@ -518,8 +518,7 @@ class GasSolver3D(GasSolver):
         K3.begin_step(state.p, state.rho, state.u, state.v, state.w, state.voidage, eps_new, self.W, self.Q, self.C,
                       self.F, self.K, self.S, self.T, self.flags, self.RULES, fpar, ipar)
         if pressure_voidage is not None:  # replaces the ε_f that begin_step gave the pressure term
-            for a, e in enumerate(pressure_voidage):
-                self.F[(lay.F_EP,) + self._face_slices[a]] = e
+            K3.load_faces(self.F, lay.F_EP, *pressure_voidage)
         it = 0
         prev = math.inf
         fresh = False  # the factors (SuperLU) are of this iteration's matrix

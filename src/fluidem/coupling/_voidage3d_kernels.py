@@ -72,7 +72,8 @@ def _corner_primitive(z, a, b, r, wa, wb):
     p = r * r * z - z * z * z / 3.0  # ∫ (r² − z²) dz
     cross = a * wb + b * wa
     real = wa * wb - a * b  # exactly 0 at the upper end (wa = b, wb = a): there the sum is π/2, no call
-    asq = 0.5 * math.pi if real == 0.0 and cross > 0.0 else math.atan2(cross, real)  # asin(a/ρ) + asin(b/ρ)
+    # asin(a/ρ) + asin(b/ρ)
+    asq = 0.5 * math.pi if real == 0.0 and cross > 0.0 else math.atan2(cross, real)
     at = math.atan2(z * r * cross, r * r * wa * wb - z * z * a * b)
     # −½ ∫ ρ² asin(q/ρ) dz by parts: −½ p asin(q/ρ) + r³/3 atan(z q/(r w)) here, ½ q j below, for both axes
     out = 0.25 * math.pi * p + a * b * z - 0.5 * p * asq + r * r * r / 3.0 * at

@@ -153,7 +153,6 @@ def load_momentum_sources(F, a, us, source, n0, n1, n2):
                 F[F_RHS, a, i, j, k] = r
 
 
-
 @njit(cache=True, error_model="numpy")
 def _load_axis(F, a, b, us, source, n0, n1, n2):
     """``load_beta`` and then ``load_momentum_sources`` on the faces of axis ``a`` (``b`` empty: β is not
@@ -205,6 +204,7 @@ def load_faces(F, field, e0, e1, e2):
     _load_face(F, field, np.int64(0), e0)
     _load_face(F, field, np.int64(1), e1)
     _load_face(F, field, np.int64(2), e2)
+
 
 # ---------------------------------------------------------------------------- ghosts
 @njit(cache=True, error_model="numpy")

@@ -434,7 +434,8 @@ class GasSolver3D(GasSolver):
         b, us, src = [none, none, none], [none, none, none], [none, none, none]
         for a in range(3):
             if beta is not None:
-                b[a] = self._face(f"beta[{a}]", beta[a], a, centre_ok=False) if per_face else self._face("beta", beta, a)
+                b[a] = (self._face(f"beta[{a}]", beta[a], a, centre_ok=False) if per_face
+                        else self._face("beta", beta, a))
                 if solids[a] is not None:  # the solids velocity counts only where β is given
                     us[a] = self._face(f"solids velocity {'uvw'[a]}", solids[a], a)
             if sources[a] is not None:

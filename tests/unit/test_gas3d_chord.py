@@ -13,7 +13,9 @@ velocities (a start-up: the pressure changes by 1-2 kPa a step):
   mass-residual tolerance, 1e-10 of the reference flow);
 * with the threshold at 1 (always a chord step after the first iteration) each step makes one hierarchy and
   still ends within the tolerance (the chord is then slower to converge, which is why the threshold is 1e-3);
-* with the threshold at 0 every iteration makes its own hierarchy.
+* with the threshold at 0 every iteration makes its own hierarchy;
+* where GMRES on the kept Jacobian fails, the iteration assembles again and the step is the one of fresh
+  Jacobians (the retry branch, reached by making every chord attempt fail).
 """
 from __future__ import annotations
 
@@ -81,3 +83,45 @@ def test_the_threshold_decides_which_iterations_make_a_hierarchy(monkeypatch, ch
         assert ok and res <= tol
         assert made == (1 if hierarchies == "one" else it)
         assert it >= 2
+
+
+def test_a_chord_step_whose_gmres_fails_assembles_again(monkeypatch):
+    """The retry branch: where GMRES on the kept Jacobian does not converge, the iteration assembles the current
+    Jacobian, makes its hierarchy and solves again, and the step goes on as if it had never tried the chord.
+    ``newton_multigrid`` runs as Python (its ``py_func``) so that its ``gmres`` can be replaced by one that makes
+    every chord attempt fail (the real GMRES given no iterations); every iteration after the first tries the chord
+    (threshold 1), so every one of them takes the branch."""
+    from fluidem.gas import _solver3d_kernels as K3
+
+    fresh, fresh_steps, tol = run(monkeypatch, 0.0)  # compiled; a hierarchy per iteration
+
+    real_gmres, real_setup = K3.gmres, K3.mg_setup
+    calls = {"setup": 0, "chord": 0, "since_setup": 0}
+
+    def setup(*args):
+        calls["setup"] += 1
+        calls["since_setup"] = 0
+        return real_setup(*args)
+
+    def gmres(*args):
+        calls["since_setup"] += 1
+        if calls["since_setup"] > 1:  # no hierarchy made since the last solve: a chord attempt
+            calls["chord"] += 1
+            return real_gmres(*args[:-1], 0)  # no iterations allowed: -1 unless the residual is already small
+        return real_gmres(*args)
+
+    monkeypatch.setattr(K3, "newton_multigrid", K3.newton_multigrid.py_func)
+    monkeypatch.setattr(K3, "gmres", gmres)
+    monkeypatch.setattr(K3, "mg_setup", setup)
+    retried, retried_steps, _ = run(monkeypatch, 1.0)
+    iterations = sum(s[0] for s in retried_steps)
+    assert calls["chord"] == iterations - STEPS > 0  # every iteration after each step's first tried the chord
+    assert calls["setup"] == iterations  # ... failed, and assembled again
+    for (it_f, made_f, _, _, change, speed), (it_r, made_r, res_r, ok_r, _, _) in zip(fresh_steps, retried_steps):
+        assert ok_r and res_r <= tol
+        assert it_r == it_f and made_r == it_r
+    change = max(s[4] for s in fresh_steps)
+    speed = max(s[5] for s in fresh_steps)
+    assert np.abs(retried.p - fresh.p).max() <= 1e-10 * change
+    for a, b in ((retried.u, fresh.u), (retried.v, fresh.v), (retried.w, fresh.w)):
+        assert np.abs(a - b).max() <= 1e-10 * speed

@@ -365,7 +365,9 @@ def _face_sums_slab(s, lo, hi, slabs, position, velocity, volume, kp, ok, idx, i
                     BU, AV, BV, AW, BW, KC, EU, EV, EW):
     """The sums of ``_face_sums_serial`` onto the x nodes [lo, hi) of slab s, in particle order: the particles
     whose slabs (``_face_slabs``) include s, each term whose x node lies in the slab (all of them where the
-    particle's nodes lie in s alone). Every node receives the terms of the serial pass, in the same order."""
+    particle's nodes lie in s alone). Every node receives the terms of the serial pass, in the same order.
+    Written out beside the serial pass rather than sharing a per-particle helper with it: such a helper, inlined
+    or called, made the deposit of ``bubbling-3d`` 15-30 % slower (0.59-0.68 against 0.50-0.52 ms on two threads)."""
     nx, ny, nz = KC.shape
     own = np.int64(1) << s  # slab_bits of its x indices
     for q in range(position.shape[0]):

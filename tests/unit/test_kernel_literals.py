@@ -31,6 +31,8 @@ WANTED = {
     ("_add_product", 3),  # 2D gas: the face axis of a product
     ("_mg_gauss_seidel", 5),  # 2D multigrid: forward or backward sweep
     ("_faces_of_axis3", 2),  # 3D "cell" exchange: the face axis, tested in the loop over the faces
+    ("advance", 42),  # a flat 2D bed (advance_flat): compiled without the variants of beds that are not flat
+    ("compute_forces", 29),  # the same for the forces at set-up (compute_forces_flat)
 }
 
 

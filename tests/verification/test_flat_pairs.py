@@ -1,4 +1,4 @@
-"""The pair loop of flat 2D beds (``_softsphere_kernels._slab_pairs_flat``) against the general one.
+"""The pair loop of flat 2D beds (``_pair_kernels._slab_flat``) against the general one.
 
 A one-layer 2D bed (every centre at the same z, no motion along z, spin about z only, every
 tangential spring in the plane: ``is_flat``) has exact zeros in all z components of the contact
@@ -51,7 +51,7 @@ def test_flat_pair_loop_gives_the_general_sums(tiny_bed_case, model):
                                          friction=0.4))
     bed = flat_bed(eng)
     assert K.is_flat(bed[0], bed[1], bed[2], bed[7])
-    general, flat = pair_sums(eng, bed, False), pair_sums(eng, bed, True)
+    general, flat = pair_sums(eng, bed, None), pair_sums(eng, bed, True)
     f, c, h = general
     assert np.count_nonzero(np.linalg.norm(f, axis=1)) == 400, "every disc in contact"
     assert np.count_nonzero(c[:, 2]) == 400, "friction acts on every disc"

@@ -84,7 +84,8 @@ def sums(b, pp, flat, update=True, nthreads=1):
     f, c, h = np.zeros((600, 3)), np.zeros((600, 3)), b["hist"].copy()
     block = K.thread_blocks(b["row_start"], b["slab_start"], b["slab_members"], nthreads)
     K.pair_forces(b["pos"], b["vel"], b["omega"], b["radius"], b["mass"], b["species"], pp, b["row_start"],
-                  b["partner"], b["slab_start"], b["slab_members"], h, 1e-5, update, f, c, block, flat)
+                  b["partner"], b["slab_start"], b["slab_members"], h, 1e-5, update, f, c, block,
+                  True if flat else None)
     return f, c, h
 
 
@@ -218,7 +219,7 @@ def test_a_contact_that_ends_resets_its_spring_between_steps():
     assert work[4].all(), "every random spring counts as set"
     f, c, h = np.zeros((600, 3)), np.zeros((600, 3)), b["hist"].copy()
     args = (b["radius"], b["mass"], b["species"], pp, b["row_start"], b["partner"], b["slab_start"], b["slab_members"])
-    K.pair_forces(b["pos"], b["vel"], b["omega"], *args, h, 1e-5, True, f, c, block, False, work)
+    K.pair_forces(b["pos"], b["vel"], b["omega"], *args, h, 1e-5, True, f, c, block, None, work)
     np.testing.assert_array_equal(work[4].astype(bool), t0)
     assert h[t0].all(axis=1).any() and not h[~t0].any()
     # spread the bed by 2 %: some contacts end
@@ -229,7 +230,7 @@ def test_a_contact_that_ends_resets_its_spring_between_steps():
     assert (t0 & ~t1).sum() > 100
     f[:] = 0.0
     c[:] = 0.0
-    K.pair_forces(pos, b["vel"], b["omega"], *args, h, 1e-5, True, f, c, block, False, work)
+    K.pair_forces(pos, b["vel"], b["omega"], *args, h, 1e-5, True, f, c, block, None, work)
     assert not h[~t1].any(), "ended contacts' springs are zero"
     assert h[t1].any(axis=1).all()
     np.testing.assert_array_equal(work[4].astype(bool), t1)

@@ -441,22 +441,27 @@ def _slab_flat_periodic(s, state, pp, lists, hist, dt, update, sum_f, sum_c, tou
 @njit(cache=True, error_model="numpy")
 def chunk_run(start, stop, flat, state, pp, lists, hist, dt, update, sum_f, sum_c, work, t, period):
     """The contacts of slabs start, start + 2, … below stop (one parity) with thread t's work rows.
-    ``period`` (3,): the box's length along each periodic axis, 0 elsewhere (all zero: no periodic side)."""
+    ``flat``: None, or True for a flat 2D bed. ``period``: None (no periodic side), or (3,) the box's length
+    along each periodic axis, 0 elsewhere. Both choose the slab variant when this is compiled: Numba drops a
+    branch on ``arg is None`` from the compilation, with the variant it calls, so a run compiles only the
+    variant it uses (the three others cost 15 s of a first run's compiling)."""
     cbuf, ibuf, G, out, touch, uniform, ext = work
     cb = cbuf[t]
     ib = ibuf[t]
     g = G[t]
     o = out[t]
-    per = (period[0] != 0.0) | (period[1] != 0.0) | (period[2] != 0.0)
-    for s in range(start, stop, 2):
-        if per:
-            if flat:
-                _slab_flat_periodic(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform,
-                                    ext, period)
+    if period is None:
+        box = np.zeros(3)  # not read: the slabs of a box without periodic sides take no nearest image
+        for s in range(start, stop, 2):
+            if flat is None:
+                _slab(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform, ext, box)
             else:
+                _slab_flat(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform, ext, box)
+    else:
+        for s in range(start, stop, 2):
+            if flat is None:
                 _slab_periodic(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform, ext,
                                period)
-        elif flat:
-            _slab_flat(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform, ext, period)
-        else:
-            _slab(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform, ext, period)
+            else:
+                _slab_flat_periodic(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform,
+                                    ext, period)

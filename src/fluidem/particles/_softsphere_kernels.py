@@ -169,7 +169,7 @@ def _chunk_forces(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat,
 
 @njit(cache=True, error_model="numpy")
 def pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
-                dt, update, sum_f, sum_c, block, flat=False, work=None, period=None):
+                dt, update, sum_f, sum_c, block, flat=None, work=None, period=None):
     """Add the contact force sums (sum_f) and Σ −n × F_t (sum_c, torque per unit lever arm) per particle.
 
     sum_f and sum_c must be zero on entry (gather_forces leaves them so). The contact law runs vectorised
@@ -177,27 +177,27 @@ def pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, 
     touch only slabs s and s + 1. ``block``: the slab blocks of the threads (``thread_blocks``); with one
     block the slabs run in the same order without a parallel region. Every particle gets its terms in the
     same order either way (bitwise the same sums).
-    ``flat``: a flat 2D bed (``is_flat``), whose sum_f z and sum_c x, y are left as they are.
+    ``flat``: None, or True for a flat 2D bed (``is_flat``), whose sum_f z and sum_c x, y are left as they are
+    (False is refused: the variant is chosen by None or not when this is compiled, see ``chunk_run``).
     ``work``: ``_pair_kernels.make_work`` for this list and at least len(block) − 1 threads (made here if
     None or too small).
     ``period``: (3,) the box length along each periodic axis, 0 elsewhere (None: no periodic side); centre
     offsets are then taken by nearest image, with a list from ``build_pairs_periodic``.
     """
-    if period is None:
-        box = np.zeros(3)
-    else:
-        box = period
+    if flat is not None:
+        if not flat:
+            raise ValueError("pair_forces: flat must be None (a bed that is not flat) or True (a flat 2D bed)")
     state = (pos, vel, omega, radius, mass, species)
     lists = (row_start, partner, slab_start, slab_members)
     nthreads = block.shape[0] - 1
     if work is None:
         _chunk_forces(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat,
-                      make_work(pp, row_start, hist, slab_start, slab_members, nthreads), box)
+                      make_work(pp, row_start, hist, slab_start, slab_members, nthreads), period)
     elif work[0].shape[0] < nthreads:
         _chunk_forces(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat,
-                      make_work(pp, row_start, hist, slab_start, slab_members, nthreads), box)
+                      make_work(pp, row_start, hist, slab_start, slab_members, nthreads), period)
     else:
-        _chunk_forces(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, work, box)
+        _chunk_forces(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, work, period)
 
 
 @njit(cache=True, error_model="numpy")
@@ -598,7 +598,7 @@ def _gather_parallel(pos, vel, omega, radius, mass, species, pw, wall_now, wall_
     """Thread k gathers particles first[k] … first[k + 1] − 1."""
     moved = 0
     for k in prange(first.shape[0] - 1):
-        if flat:
+        if flat is not None:
             moved += _gather_range_flat(first[k], first[k + 1], pos, vel, omega, radius, mass, species, pw, wall_now,
                                         wall_normal, wall_axis, wall_hist, wall_touch, near_count, near_wall, gravity,
                                         ext_force, ext_damping, has_ext, dim2, sum_f, sum_c, dt, force, torque, inv_mass,
@@ -614,7 +614,7 @@ def _gather_parallel(pos, vel, omega, radius, mass, species, pw, wall_now, wall_
 @njit(cache=True, error_model="numpy")
 def gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal, wall_axis,
                   wall_hist, wall_touch, near_count, near_wall, gravity, ext_force, ext_damping, has_ext, dim2, sum_f, sum_c,
-                  t, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2, first, flat=False):
+                  t, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2, first, flat=None):
     """Total force and torque per particle: contact sums, walls, gravity, external force.
 
     ``mode`` fuses the integrator into the same pass (one memory sweep per step):
@@ -627,7 +627,8 @@ def gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_
     ``near_count``, ``near_wall``: the walls each particle is checked against (``near_walls``; all walls: ``all_walls``).
     ``first``: the particle ranges of the threads, slab_start[thread_blocks(…)] (0 and N: one thread, no
     parallel region). Each particle's arithmetic is the same on any number of threads.
-    ``flat``: a flat 2D bed (``is_flat`` and ``dim2``), after flat pair forces (``_gather_body``).
+    ``flat``: None, or True for a flat 2D bed (``is_flat`` and ``dim2``) after flat pair forces
+    (``_gather_body``); chosen when this is compiled, as ``pair_forces``'s.
     """
     wall_now = walls_now(wall_motion, wall_point0, t)
     n = pos.shape[0]
@@ -635,7 +636,7 @@ def gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_
         return _gather_parallel(pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_axis, wall_hist,
                                 wall_touch, near_count, near_wall, gravity, ext_force, ext_damping, has_ext, dim2, sum_f,
                                 sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2, first, flat)
-    if flat:
+    if flat is not None:
         return _gather_range_flat(np.int64(0), n, pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal,
                                   wall_axis, wall_hist, wall_touch, near_count, near_wall, gravity, ext_force,
                                   ext_damping, has_ext, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia,
@@ -771,21 +772,24 @@ def reorder(pos, vel, omega, force, torque, radius, mass, inertia, inv_mass, inv
 @njit(cache=True, error_model="numpy")
 def compute_forces(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, wall_point0, wall_normal,
                    wall_hist, gravity, ext_force, ext_damping, dim2, row_start, partner, hist, slab_start, slab_members,
-                   t, dt, update, force, torque, nthreads, period, shapes):
+                   t, dt, update, force, torque, nthreads, period, shapes, flat):
     """Forces and torques at the current state (no integration; history updated only if ``update``).
-    ``period`` (3,): the box length along each periodic axis, 0 elsewhere. ``shapes``: the wall shapes' arrays
-    (``shapes.ShapeSet.kernel_arrays``; their near lists made anew)."""
+    ``period`` (3,): the box length along each periodic axis, 0 elsewhere (None: no periodic side). ``shapes``:
+    the wall shapes' arrays (``shapes.ShapeSet.kernel_arrays``; their near lists made anew; None: no shape).
+    ``flat``: None, or True for a flat 2D bed (``compute_forces_flat``). The three choose what is compiled, as
+    ``advance``'s.
+    """
     sum_f = np.zeros_like(force)
     sum_c = np.zeros_like(force)
     block = thread_blocks(row_start, slab_start, slab_members, nthreads)
-    flat = dim2 and is_flat(pos, vel, omega, hist)
     pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
                 dt, update, sum_f, sum_c, block, flat, make_work(pp, row_start, hist, slab_start, slab_members, nthreads),
                 period)
-    shape_forces(shapes, pos, pos, vel, omega, radius, mass, species, species, np.bool_(True), np.int64(-1), t, dt,
-                 update, flat, sum_f, sum_c)
-    if has_bodies(shapes):  # the free bodies' force and torque for their first half kick
-        body_loads(shapes[3], shapes[18])
+    if shapes is not None:
+        shape_forces(shapes, pos, pos, vel, omega, radius, mass, species, species, np.bool_(True), np.int64(-1), t,
+                     dt, update, flat is not None, sum_f, sum_c)
+        if has_bodies(shapes):  # the free bodies' force and torque for their first half kick
+            body_loads(shapes[3], shapes[18])
     near_count, near_wall = all_walls(pos.shape[0], wall_normal.shape[0])
     # has_ext and mode as run-time values, as advance passes them: a constant argument is a literal type to
     # Numba, which would compile gather_forces once more for it (and with it all it calls)
@@ -802,7 +806,7 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
             wall_motion, wall_point0, wall_normal, wall_hist, gravity, ext_force, ext_damping, dim2,
             row_start, partner, hist, slab_start, slab_members, ref_pos, skin, step0, dt, nsteps, nthreads,
             inertia, ids, reorder_interval, last_reorder, wall_touch, near_count, near_wall, period, box_lo, image,
-            shapes):
+            shapes, flat):
     """Run ``nsteps`` velocity-Verlet DEM steps from step ``step0`` (time step0 * dt).
 
     Order of one step::
@@ -828,14 +832,24 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
     order[k]; empty if none).
     ``wall_touch``, ``near_count``, ``near_wall``: the walls within reach (``near_walls``), made anew at each
     rebuild; the caller keeps them between calls (made at set-up and after a restore).
-    ``period`` (3,): the box length along each periodic axis, 0 elsewhere; ``box_lo`` (3,) the box's lower
-    corner; ``image`` (N, 3) int64 the image counts, updated as particles wrap. With a periodic axis the
-    list is ``build_pairs_periodic``'s and pair offsets are taken by nearest image.
-    ``shapes``: the wall shapes' arrays (``shapes.ShapeSet.kernel_arrays``), their forces added once a step
-    (``_shape_kernels.shape_step``; nothing without shapes); free bodies among them take the same half kicks and
-    drift as the particles (``bodies_kick_drift`` at the start, ``bodies_step`` after each step's forces).
+    ``period`` (3,): the box length along each periodic axis, 0 elsewhere (None: no periodic side);
+    ``box_lo`` (3,) the box's lower corner; ``image`` (N, 3) int64 the image counts, updated as particles
+    wrap. With a periodic axis the list is ``build_pairs_periodic``'s and pair offsets are taken by nearest
+    image.
+    ``shapes``: the wall shapes' arrays (``shapes.ShapeSet.kernel_arrays``; None: no shape), their forces added
+    once a step (``_shape_kernels.shape_step``); free bodies among them take the same half kicks and drift as
+    the particles (``bodies_kick_drift`` at the start, ``bodies_step`` after each step's forces).
+    ``flat``: None, or True for a flat 2D bed (``dim2`` and ``is_flat``; a flat bed stays flat: in 2D gather_forces
+    zeroes F_z and T_x, T_y at every step).
+
+    ``period``, ``shapes`` and ``flat`` choose what is compiled, down to the slab and gather variants: Numba
+    leaves out of a compilation a branch that an ``arg is None`` test rules out, with the kernels it calls,
+    where the argument's type is None or a literal (``Literal[bool](True)``: a constant passed by another
+    compiled function, ``advance_flat``), not where it is a run-time value (``bool``, an array), whose
+    compilation keeps both branches. So a run of a flat 2D bed (``advance_flat``) or of a bed that is not
+    flat (``flat`` None), without periodic sides or wall shapes, compiles only the variants it uses
+    (``benchmarks/compile_time.py``).
     """
-    per = (period[0] != 0.0) | (period[1] != 0.0) | (period[2] != 0.0)
     limit2 = (0.5 * skin) ** 2
     update = nsteps > 0  # a run-time True, as compute_forces passes it (a literal would compile pair_forces twice)
     sum_f = np.zeros_like(force)
@@ -848,17 +862,17 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
     wall_axis = wall_axes(wall_normal)
     has_ext = any_nonzero(ext_force, ext_damping)
     moved = _kick_drift(pos, vel, omega, force, torque, inv_mass, inv_inertia, dt, ref_pos, limit2)
-    bodies = has_bodies(shapes)
-    if bodies:
-        bodies_kick_drift(shapes, dt)
+    bodies = False
+    if shapes is not None:
+        bodies = has_bodies(shapes)
+        if bodies:
+            bodies_kick_drift(shapes, dt)
     block = thread_blocks(row_start, slab_start, slab_members, nthreads)
     first = slab_start[block]
     work = make_work(pp, row_start, hist, slab_start, slab_members, nthreads)
-    # a flat 2D bed stays flat: in 2D gather_forces zeroes F_z and T_x, T_y at every step
-    flat = dim2 and is_flat(pos, vel, omega, hist)
     for s in range(nsteps):
         t = (step0 + s + 1) * dt
-        if per:
+        if period is not None:
             wrap_positions(pos, ref_pos, image, period, box_lo)
         if moved > 0:
             if reorder_interval > 0 and step0 + s - last_reorder >= reorder_interval:
@@ -868,7 +882,7 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
                 combined = order if combined.shape[0] == 0 else combined[order]
                 last_reorder = step0 + s
                 reorders += 1
-            if per:
+            if period is not None:
                 row_start, partner, hist, slab_start, slab_members = rebuild_periodic(
                     pos, radius, skin, dim2, row_start, partner, hist, ref_pos, period, box_lo)
             else:
@@ -882,13 +896,40 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
             rebuilds += 1
         pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
                     dt, update, sum_f, sum_c, block, flat, work, period)
-        shape_step(shapes, pos, ref_pos, vel, omega, radius, mass, species, ids, moved > 0, last_reorder, t, dt, update,
-                   flat, sum_f, sum_c)
+        if shapes is not None:
+            shape_step(shapes, pos, ref_pos, vel, omega, radius, mass, species, ids, moved > 0, last_reorder, t, dt,
+                       update, flat is not None, sum_f, sum_c)
         mode = 2 if s < nsteps - 1 else 1
         moved = gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
                               wall_axis, wall_hist, wall_touch, near_count, near_wall, gravity, ext_force, ext_damping,
                               has_ext, dim2, sum_f, sum_c, t, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2,
                               first, flat)
-        if bodies:  # the free bodies' kicks and drift, as the particles' in gather_forces
-            bodies_step(shapes, dt, mode)
+        if shapes is not None:
+            if bodies:  # the free bodies' kicks and drift, as the particles' in gather_forces
+                bodies_step(shapes, dt, mode)
     return row_start, partner, hist, slab_start, slab_members, rebuilds, last_reorder, reorders, combined
+
+
+@njit(cache=True, error_model="numpy")
+def advance_flat(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia, species, pp, pw,
+                 wall_motion, wall_point0, wall_normal, wall_hist, gravity, ext_force, ext_damping, dim2,
+                 row_start, partner, hist, slab_start, slab_members, ref_pos, skin, step0, dt, nsteps, nthreads,
+                 inertia, ids, reorder_interval, last_reorder, wall_touch, near_count, near_wall, period, box_lo, image,
+                 shapes):
+    """``advance`` of a flat 2D bed: ``flat`` passed as a constant, so that it is compiled without the
+    variants of beds that are not flat."""
+    return advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia, species, pp, pw,
+                   wall_motion, wall_point0, wall_normal, wall_hist, gravity, ext_force, ext_damping, dim2,
+                   row_start, partner, hist, slab_start, slab_members, ref_pos, skin, step0, dt, nsteps, nthreads,
+                   inertia, ids, reorder_interval, last_reorder, wall_touch, near_count, near_wall, period, box_lo,
+                   image, shapes, True)
+
+
+@njit(cache=True, error_model="numpy")
+def compute_forces_flat(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, wall_point0, wall_normal,
+                        wall_hist, gravity, ext_force, ext_damping, dim2, row_start, partner, hist, slab_start,
+                        slab_members, t, dt, update, force, torque, nthreads, period, shapes):
+    """``compute_forces`` of a flat 2D bed (as ``advance_flat``)."""
+    compute_forces(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, wall_point0, wall_normal,
+                   wall_hist, gravity, ext_force, ext_damping, dim2, row_start, partner, hist, slab_start, slab_members,
+                   t, dt, update, force, torque, nthreads, period, shapes, True)

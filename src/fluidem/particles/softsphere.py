@@ -240,13 +240,27 @@ class SoftSphereEngine(ParticleEngine):
         return np.repeat(np.arange(st.n), np.diff(rs)), partner
 
     # ------------------------------------------------------------ stepping
+    def _variants(self) -> tuple[bool, np.ndarray | None, tuple | None]:
+        """Whether the bed is flat 2D (``K.is_flat``: ``K.advance_flat`` and ``K.compute_forces_flat`` then),
+        and ``period`` and ``shapes`` of the kernels, None where the run has none (no periodic side, no wall
+        shape): they choose what Numba compiles, so that a run compiles only the kernel variants it uses."""
+        st = self.state
+        flat = bool(self.dim2 and K.is_flat(st.position, st.velocity, st.omega, self.hist))
+        return (flat, self.period if self.periodic else None,
+                self.shapes.kernel_arrays() if len(self.shapes) else None)
+
     def _compute_forces(self, update: bool):
         st = self.state
-        K.compute_forces(st.position, st.velocity, st.omega, st.radius, st.mass, st.species, self.pp, self.pw,
-                         self.wall_motion, self.wall_point0, self.wall_normal, self.wall_hist, self.gravity,
-                         self.ext_force, self.ext_damping, self.dim2, self.row_start, self.partner, self.hist, self.slab_start,
-                         self.slab_members, self.time, self.dt, update, st.force, st.torque,
-                         numba.get_num_threads(), self.period, self.shapes.kernel_arrays())
+        flat, period, shapes = self._variants()
+        args = (st.position, st.velocity, st.omega, st.radius, st.mass, st.species, self.pp, self.pw,
+                self.wall_motion, self.wall_point0, self.wall_normal, self.wall_hist, self.gravity,
+                self.ext_force, self.ext_damping, self.dim2, self.row_start, self.partner, self.hist, self.slab_start,
+                self.slab_members, self.time, self.dt, update, st.force, st.torque,
+                numba.get_num_threads(), period, shapes)
+        if flat:
+            K.compute_forces_flat(*args)
+        else:
+            K.compute_forces(*args, None)
 
     def external_force(self) -> np.ndarray:
         """The external (gas) force on each particle at the current velocity, ext_force − c v [N], (N, 3)."""
@@ -257,15 +271,15 @@ class SoftSphereEngine(ParticleEngine):
         if nsteps <= 0:
             return
         st = self.state
+        flat, period, shapes = self._variants()
+        args = (st.position, st.velocity, st.omega, st.force, st.torque, st.radius, st.mass, self.inv_mass,
+                self.inv_inertia, st.species, self.pp, self.pw, self.wall_motion, self.wall_point0, self.wall_normal,
+                self.wall_hist, self.gravity, self.ext_force, self.ext_damping, self.dim2, self.row_start, self.partner,
+                self.hist, self.slab_start, self.slab_members, self.ref_pos, self.skin, self.steps, self.dt, nsteps,
+                numba.get_num_threads(), st.inertia, st.ids, self.reorder_interval, self.last_reorder,
+                self.wall_touch, self.near_count, self.near_wall, period, self.box_lo, st.image, shapes)
         (self.row_start, self.partner, self.hist, self.slab_start, self.slab_members, nreb, last_reorder,
-         nreorder, order) = K.advance(
-            st.position, st.velocity, st.omega, st.force, st.torque, st.radius, st.mass, self.inv_mass,
-            self.inv_inertia, st.species, self.pp, self.pw, self.wall_motion, self.wall_point0, self.wall_normal,
-            self.wall_hist, self.gravity, self.ext_force, self.ext_damping, self.dim2, self.row_start, self.partner, self.hist,
-            self.slab_start, self.slab_members, self.ref_pos, self.skin, self.steps, self.dt, nsteps,
-            numba.get_num_threads(), st.inertia, st.ids, self.reorder_interval, self.last_reorder,
-            self.wall_touch, self.near_count, self.near_wall, self.period, self.box_lo, st.image,
-            self.shapes.kernel_arrays())
+         nreorder, order) = K.advance_flat(*args) if flat else K.advance(*args, None)
         self.shapes.after_advance()
         self.steps += nsteps
         self.time = self.steps * self.dt

@@ -107,3 +107,21 @@ def test_pair_forces_refuses_a_false_flat(tiny_bed_case):
                       eng.partner, eng.slab_start, eng.slab_members, eng.hist.copy(), eng.dt, True,
                       np.zeros_like(st.force), np.zeros_like(st.force), np.array([0, eng.slab_start.shape[0] - 1]),
                       False)
+
+
+def test_the_hard_sphere_step_without_periodic_sides_compiles_no_periodic_list(monkeypatch):
+    """The event-driven engine passes ``period`` None in a box without periodic sides, and its ``advance`` then
+    leaves the periodic list build and the wrap out (a copy compiled with those two as failing stubs runs)."""
+    import fluidem as fd
+    from fluidem.particles import _hardsphere_kernels as H
+    from fluidem.particles.hardsphere import HardSphereEngine
+
+    case = fd.load_case("pour").with_overrides({
+        "particles.contact": {"model": "hard_sphere", "restitution": 0.9, "friction": 0.3},
+        "particles.species.0.count": 30, "time.dt": 1e-4})
+    eng = HardSphereEngine(case)
+    monkeypatch.setattr(H, "build_neighbours_periodic", _left_out)
+    monkeypatch.setattr(H, "_wrap", _left_out)
+    monkeypatch.setattr(H, "advance", njit(error_model="numpy")(H.advance.py_func))
+    eng.advance(2)
+    assert eng.steps == 2

@@ -775,7 +775,8 @@ def advance(pos, vel, omega, radius, inv_mass, inv_inertia, species, pp, pw, wal
         Pairs meet across a periodic side by their image shift (``_image_shift``). Positions are wrapped into
         the box at each list rebuild only (x ← x − k L, ``_wrap``), so between rebuilds a particle is outside
         the box by at most skin/2, and each rebuild adds k to ``image_step`` (N, 3) int64 (the caller adds it
-        to the image counts when the call succeeds)
+        to the image counts when the call succeeds). None: no periodic side (Numba then compiles no
+        periodic list build: an ``arg is None`` test is decided from the argument's type)
 
     Returns (nbr_start, nbr, up_start, up, status); status OK or TOO_MANY_EVENTS. On OK, pos, vel, omega,
     ref_pos and last_coll hold the new state; on TOO_MANY_EVENTS they are left as they were
@@ -799,9 +800,12 @@ def advance(pos, vel, omega, radius, inv_mass, inv_inertia, species, pp, pw, wal
     nbr_start_u = nbr_start.view(np.uint64)
     nbr_u = nbr.view(np.uint32)
     kick = 0.5 * dt if split else dt  # the force impulse before the collisions, per unit acceleration
-    lx = period[0]
-    ly = period[1]
-    lz = period[2]
+    if period is None:  # decided when compiled (see ``period`` above)
+        lx = ly = lz = 0.0
+    else:
+        lx = period[0]
+        ly = period[1]
+        lz = period[2]
     per = lx > 0.0 or ly > 0.0 or lz > 0.0
     for s in range(nsteps):
         t_abs0 = (step0 + s) * dt
@@ -822,12 +826,15 @@ def advance(pos, vel, omega, radius, inv_mass, inv_inertia, species, pp, pw, wal
             # a particle reached skin/2 from its reference position: all to time t, new list around X
             for k in range(n):
                 _move(k, t, P)
-                if per:
-                    _wrap(k, P, period, box_lo, image_step)
+                if period is not None:
+                    if per:
+                        _wrap(k, P, period, box_lo, image_step)
                 X[k, 0] = P[P_ROW * k + P_X]
                 X[k, 1] = P[P_ROW * k + P_Y]
                 X[k, 2] = P[P_ROW * k + P_Z]
-            if per:
+            if period is None:
+                nbr_start, nbr = build_neighbours(X, radius, skin, dim2)
+            elif per:
                 nbr_start, nbr = build_neighbours_periodic(X, radius, skin, dim2, period, box_lo)
             else:
                 nbr_start, nbr = build_neighbours(X, radius, skin, dim2)

@@ -237,7 +237,7 @@ class HardSphereEngine(ParticleEngine):
             self.pw, self.wall_point0, self.wall_normal, self.gravity, self.ext_force, self.dim2, self.nbr_start,
             self.nbr, self.up_start, self.up, self.ref_pos, self.skin, self.last_collision, self.steps, self.dt, nsteps,
             self.max_events_per_step, self.counters, self.energy, self.event_log, info, self._work,
-            self.force_step == "split", self.period, self.box_lo, self._image_step)
+            self.force_step == "split", self.period if self.periodic else None, self.box_lo, self._image_step)
         if self.periodic:
             if status == K.OK:  # a failed call left the positions as they were: its crossings do not count
                 st.image += self._image_step

@@ -444,7 +444,7 @@ def chunk_run(start, stop, flat, state, pp, lists, hist, dt, update, sum_f, sum_
     ``flat``: None, or True for a flat 2D bed. ``period``: None (no periodic side), or (3,) the box's length
     along each periodic axis, 0 elsewhere. Both choose the slab variant when this is compiled: Numba drops a
     branch on ``arg is None`` from the compilation, with the variant it calls, so a run compiles only the
-    variant it uses (the three others cost 15 s of a first run's compiling)."""
+    variant it uses (the others took 4 - 5 s each of a first run's compiling)."""
     cbuf, ibuf, G, out, touch, uniform, ext = work
     cb = cbuf[t]
     ib = ibuf[t]

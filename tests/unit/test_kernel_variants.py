@@ -1,7 +1,8 @@
 """A run compiles only the kernel variants it uses (``_softsphere_kernels.advance``, ``_pair_kernels.chunk_run``).
 
-The pair and gather loops come in variants: a flat 2D bed or not, a box with periodic sides or not. The
-dispatchers choose by ``flat is None`` and ``period is None``, which Numba decides when it compiles (dead
+The pair and gather loops come in variants: a flat 2D bed or not, a box with periodic sides or not, contact laws
+with rolling friction or adhesion or not. The dispatchers choose by ``flat is None``, ``period is None`` and
+``laws is None``, which Numba decides when it compiles (dead
 branch pruning) where the argument's type is None or a literal constant (``Literal[bool](True)``, what
 ``advance_flat`` passes), and so leaves the other variants out of the compilation: they cost tens of seconds
 of a first run (``benchmarks/compile_time.py``). A test written as ``if flat:`` would still give the same
@@ -35,13 +36,13 @@ SLABS = {"_slab": (NOT_FLAT, NO_PERIOD), "_slab_flat": (FLAT, NO_PERIOD),
          "_slab_periodic": (NOT_FLAT, PERIOD), "_slab_flat_periodic": (FLAT, PERIOD)}
 
 
-def _chunk_run_types(flat, period):
+def _chunk_run_types(flat, period, laws=types.boolean):
     work = (np.zeros((1, 4), np.uint32), np.zeros((1, 4), np.uint32), np.zeros((1, 4)), np.zeros((1, 4)),
             np.zeros(4, np.uint8), True, False)
     args = [0, 2, None, (np.zeros((2, 3)),), np.zeros((1, 1, 4)), (np.zeros(2, np.int64),), np.zeros((2, 3)), 1e-5,
-            True, np.zeros((2, 3)), np.zeros((2, 3)), work, np.int64(0), None]
+            True, np.zeros((2, 3)), np.zeros((2, 3)), work, np.int64(0), None, None]
     sig = [typeof(a) for a in args]
-    sig[2], sig[13] = flat, period
+    sig[2], sig[13], sig[14] = flat, period, laws
     return tuple(sig)
 
 
@@ -70,30 +71,82 @@ def test_the_gather_compiles_only_its_variant(monkeypatch, flat):
     ``_gather_range``, never both."""
     monkeypatch.setattr(K, "_gather_range_flat", _used if flat == FLAT else _left_out)
     monkeypatch.setattr(K, "_gather_range", _left_out if flat == FLAT else _used)
-    sig = [types.float64] * 29 + [typeof(np.zeros(3, np.int64)), flat]
+    sig = [types.float64] * 29 + [typeof(np.zeros(3, np.int64)), flat, types.boolean]
     njit(parallel=True)(K._gather_parallel.py_func).compile(tuple(sig))
     monkeypatch.setattr(K, "_gather_parallel", _used)
     monkeypatch.setattr(K, "walls_now", njit(lambda motion, point0, t: np.zeros((1, 6))))
     array = typeof(np.zeros((1, 6)))
-    sig = [array] + [types.float64] * 6 + [array] * 2 + [types.float64] * 22 + [typeof(np.zeros(3, np.int64)), flat]
+    sig = [array] + [types.float64] * 6 + [array] * 2 + [types.float64] * 22 + [typeof(np.zeros(3, np.int64)), flat,
+                                                                               types.boolean]
     njit(K.gather_forces.py_func).compile(tuple(sig))
 
 
-def test_the_engine_passes_none_for_what_its_run_lacks(tiny_bed_case):
-    """``SoftSphereEngine._variants``: flat 2D or not, and None for no periodic side and no wall shape."""
+def test_without_extended_laws_the_slabs_and_the_gather_leave_the_full_law_out(monkeypatch):
+    """``laws`` None (no rolling friction or adhesion in the run): the slab compiles without ``_law_ext`` and the
+    particle gather without ``contact_force_full`` (both replaced by failing stubs); with a run-time value both
+    laws are kept (the table's flags choose as the run goes)."""
+    monkeypatch.setattr(P, "_law_ext", _left_out)
+    njit(P._slab_flat.py_func).compile(_slab_types(types.none))
+    with pytest.raises(Exception, match="name_that_is_not_defined"):
+        njit(P._slab_flat.py_func).compile(_slab_types(types.boolean))
+    monkeypatch.setattr(K, "contact_force_full", _left_out)
+    njit(K._gather_range_flat.py_func).compile(_gather_range_types(types.none))
+    with pytest.raises(Exception, match="name_that_is_not_defined"):
+        njit(K._gather_range_flat.py_func).compile(_gather_range_types(types.boolean))
+
+
+def _slab_types(laws):
+    """The argument types of ``_slab_flat`` for the engine's arrays, with ``laws`` of the given type."""
     import fluidem as fd
     from fluidem.particles.softsphere import SoftSphereEngine
 
-    flat, period, shapes = SoftSphereEngine(fd.load_case("pour"))._variants()
-    assert flat is True and period is None and shapes is None
-    flat, period, shapes = SoftSphereEngine(tiny_bed_case(n=20))._variants()
-    assert flat is False and period is None and shapes is None
+    eng = SoftSphereEngine(fd.load_case("pour").with_overrides({"particles.species.0.count": 20}))
+    st = eng.state
+    state = (st.position, st.velocity, st.omega, st.radius, st.mass, st.species)
+    lists = (eng.row_start, eng.partner, eng.slab_start, eng.slab_members)
+    cbuf, ibuf, G, out, touch, uniform, ext = P.make_work(eng.pp, eng.row_start, eng.hist, eng.slab_start,
+                                                          eng.slab_members, 1)
+    args = (0, state, eng.pp, lists, eng.hist, eng.dt, True, st.force, st.torque, touch, cbuf[0], ibuf[0], G[0],
+            out[0], uniform, None, ext, np.zeros(3))
+    sig = [typeof(a) for a in args]
+    sig[15] = laws
+    return tuple(sig)
+
+
+def _gather_range_types(laws):
+    """The argument types of ``_gather_range_flat`` for the engine's arrays, with ``laws`` of the given type."""
+    import fluidem as fd
+    from fluidem.particles.softsphere import SoftSphereEngine
+
+    eng = SoftSphereEngine(fd.load_case("pour").with_overrides({"particles.species.0.count": 20}))
+    st = eng.state
+    args = (0, st.n, st.position, st.velocity, st.omega, st.radius, st.mass, st.species, eng.pw, np.zeros((4, 6)),
+            eng.wall_normal, K.wall_axes(eng.wall_normal), eng.wall_hist, eng.wall_touch, eng.near_count,
+            eng.near_wall, eng.gravity, eng.ext_force, eng.ext_damping, False, True, st.force, st.torque, eng.dt,
+            st.force, st.torque, eng.inv_mass, eng.inv_inertia, 0, eng.ref_pos, 1.0, None)
+    sig = [typeof(a) for a in args]
+    sig[-1] = laws
+    return tuple(sig)
+
+
+def test_the_engine_passes_none_for_what_its_run_lacks(tiny_bed_case):
+    """``SoftSphereEngine._variants``: flat 2D or not, and None for no periodic side, no wall shape and no
+    contact law with rolling friction or adhesion."""
+    import fluidem as fd
+    from fluidem.particles.softsphere import SoftSphereEngine
+
+    flat, period, shapes, laws = SoftSphereEngine(fd.load_case("pour"))._variants()
+    assert flat is True and period is None and shapes is None and laws is None
+    flat, period, shapes, laws = SoftSphereEngine(tiny_bed_case(n=20))._variants()
+    assert flat is False and period is None and shapes is None and laws is None
     case = fd.load_case("pour").with_overrides({"walls.0.periodic": ["x"], "particles.species.0.count": 50})
-    flat, period, shapes = SoftSphereEngine(case)._variants()
-    assert flat is True and period.tolist() == [0.096, 0.0, 0.0] and shapes is None
+    flat, period, shapes, laws = SoftSphereEngine(case)._variants()
+    assert flat is True and period.tolist() == [0.096, 0.0, 0.0] and shapes is None and laws is None
     case = fd.load_case("drum-3d").with_overrides({"particles.species.0.count": 20})
-    flat, period, shapes = SoftSphereEngine(case)._variants()
-    assert flat is False and period is None and shapes[0].shape[0] > 0
+    flat, period, shapes, laws = SoftSphereEngine(case)._variants()
+    assert flat is False and period is None and shapes[0].shape[0] > 0 and laws is None
+    case = fd.load_case("drum-3d-cohesive").with_overrides({"particles.species.0.count": 20})
+    assert SoftSphereEngine(case)._variants()[3] is True  # JKR between the particles
 
 
 def test_pair_forces_refuses_a_false_flat(tiny_bed_case):

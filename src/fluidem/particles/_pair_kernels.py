@@ -178,11 +178,11 @@ def _filter(flat, per, period, s, pos, radius, row_start, partner, slab_start, s
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _gather(flat, per, period, uniform, ext, c0, n, pos, vel, omega, radius, mass, species, pp, partner, hist, cbuf,
-            ibuf, G):
+def _gather(flat, per, period, uniform, laws, ext, c0, n, pos, vel, omega, radius, mass, species, pp, partner, hist,
+            cbuf, ibuf, G):
     """What the law reads of contacts c0 … c0 + n − 1 of the list into the rows of G (ext: also the relative
-    spin, and the rolling spring where the history has its columns). ``per``: centre offsets by nearest image
-    (as ``_filter``)."""
+    spin, and the rolling spring where the history has its columns; never where ``laws`` is None, see
+    ``chunk_run``). ``per``: centre offsets by nearest image (as ``_filter``)."""
     rolling = hist.shape[1] > ROLLING_HISTORY
     for c_ in range(n):
         c = U(c_)
@@ -220,16 +220,17 @@ def _gather(flat, per, period, uniform, ext, c0, n, pos, vel, omega, radius, mas
             sj = U(species[j])
             for q in range(N_SLOTS):
                 G[U((G_LAW + q) * CHUNK) + c] = pp[si, sj, U(q)]
-        if ext:
-            G[U(G_SZ * CHUNK) + c] = omega[i, U(2)] - omega[j, U(2)]
-            if not flat:
-                G[U(G_SX * CHUNK) + c] = omega[i, U(0)] - omega[j, U(0)]
-                G[U(G_SY * CHUNK) + c] = omega[i, U(1)] - omega[j, U(1)]
-            if rolling:
-                G[U(G_GZ * CHUNK) + c] = hist[p, U(ROLLING_HISTORY + 2)]
+        if laws is not None:
+            if ext:
+                G[U(G_SZ * CHUNK) + c] = omega[i, U(2)] - omega[j, U(2)]
                 if not flat:
-                    G[U(G_GX * CHUNK) + c] = hist[p, U(ROLLING_HISTORY)]
-                    G[U(G_GY * CHUNK) + c] = hist[p, U(ROLLING_HISTORY + 1)]
+                    G[U(G_SX * CHUNK) + c] = omega[i, U(0)] - omega[j, U(0)]
+                    G[U(G_SY * CHUNK) + c] = omega[i, U(1)] - omega[j, U(1)]
+                if rolling:
+                    G[U(G_GZ * CHUNK) + c] = hist[p, U(ROLLING_HISTORY + 2)]
+                    if not flat:
+                        G[U(G_GX * CHUNK) + c] = hist[p, U(ROLLING_HISTORY)]
+                        G[U(G_GY * CHUNK) + c] = hist[p, U(ROLLING_HISTORY + 1)]
 
 
 @njit(cache=True, error_model="numpy", fastmath=True)
@@ -337,10 +338,11 @@ def _law_ext(n, G, out, dt, update):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _scatter(flat, ext, c0, n, partner, hist, sum_f, sum_c, cbuf, ibuf, out):
+def _scatter(flat, laws, ext, c0, n, partner, hist, sum_f, sum_c, cbuf, ibuf, out):
     """Forces and torques of contacts c0 … c0 + n − 1 into both particles' sums (+F on i, −F on j, the same
     −n × F_t per unit lever on both); springs stored. ext: also the rolling torques, and the pull-off distance
-    into history column 3 where there is one, the rolling spring into columns 4-6 where they are."""
+    into history column 3 where there is one, the rolling spring into columns 4-6 where they are (never where
+    ``laws`` is None)."""
     wide = hist.shape[1] > 3
     rolling = hist.shape[1] > ROLLING_HISTORY
     for c_ in range(n):
@@ -370,26 +372,27 @@ def _scatter(flat, ext, c0, n, partner, hist, sum_f, sum_c, cbuf, ibuf, out):
             sum_c[j, U(0)] += cx
             sum_c[j, U(1)] += cy
             hist[p, U(2)] = out[U(O_HZ * CHUNK) + c]
-        if ext:
-            sum_c[i, U(2)] += out[U(O_MIZ * CHUNK) + c]
-            sum_c[j, U(2)] += out[U(O_MJZ * CHUNK) + c]
-            if not flat:
-                sum_c[i, U(0)] += out[U(O_MIX * CHUNK) + c]
-                sum_c[i, U(1)] += out[U(O_MIY * CHUNK) + c]
-                sum_c[j, U(0)] += out[U(O_MJX * CHUNK) + c]
-                sum_c[j, U(1)] += out[U(O_MJY * CHUNK) + c]
-            if wide:
-                hist[p, U(3)] = out[U(O_REACH * CHUNK) + c]
-            if rolling:
-                hist[p, U(ROLLING_HISTORY + 2)] = out[U(O_GZ * CHUNK) + c]
+        if laws is not None:
+            if ext:
+                sum_c[i, U(2)] += out[U(O_MIZ * CHUNK) + c]
+                sum_c[j, U(2)] += out[U(O_MJZ * CHUNK) + c]
                 if not flat:
-                    hist[p, U(ROLLING_HISTORY)] = out[U(O_GX * CHUNK) + c]
-                    hist[p, U(ROLLING_HISTORY + 1)] = out[U(O_GY * CHUNK) + c]
+                    sum_c[i, U(0)] += out[U(O_MIX * CHUNK) + c]
+                    sum_c[i, U(1)] += out[U(O_MIY * CHUNK) + c]
+                    sum_c[j, U(0)] += out[U(O_MJX * CHUNK) + c]
+                    sum_c[j, U(1)] += out[U(O_MJY * CHUNK) + c]
+                if wide:
+                    hist[p, U(3)] = out[U(O_REACH * CHUNK) + c]
+                if rolling:
+                    hist[p, U(ROLLING_HISTORY + 2)] = out[U(O_GZ * CHUNK) + c]
+                    if not flat:
+                        hist[p, U(ROLLING_HISTORY)] = out[U(O_GX * CHUNK) + c]
+                        hist[p, U(ROLLING_HISTORY + 1)] = out[U(O_GY * CHUNK) + c]
 
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _slab_body(flat, per, period, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform,
-               ext):
+               laws, ext):
     """The contacts of slab s: filter, then gather, law and scatter chunk by chunk.
     state: (pos, vel, omega, radius, mass, species); lists: (row_start, partner, slab_start, slab_members).
     ``per``: a box with periodic sides of lengths ``period`` (centre offsets by nearest image)."""
@@ -399,52 +402,59 @@ def _slab_body(flat, per, period, s, state, pp, lists, hist, dt, update, sum_f, 
                 ibuf)
     for c0 in range(0, k, CHUNK):
         n = min(CHUNK, k - c0)
-        _gather(flat, per, period, uniform, ext, c0, n, pos, vel, omega, radius, mass, species, pp, partner, hist, cbuf,
-                ibuf, G)
-        if ext:
+        _gather(flat, per, period, uniform, laws, ext, c0, n, pos, vel, omega, radius, mass, species, pp, partner, hist,
+                cbuf, ibuf, G)
+        if laws is None:
+            _law(n, G, out, dt, update)
+        elif ext:
             _law_ext(n, G, out, dt, update)
         else:
             _law(n, G, out, dt, update)
-        _scatter(flat, ext, c0, n, partner, hist, sum_f, sum_c, cbuf, ibuf, out)
+        _scatter(flat, laws, ext, c0, n, partner, hist, sum_f, sum_c, cbuf, ibuf, out)
 
 
 @njit(cache=True, error_model="numpy")
-def _slab(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform, ext, period):
+def _slab(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform, laws, ext,
+          period):
     """``_slab_body`` in 3D."""
     _slab_body(False, False, period, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out,
-               uniform, ext)
+               uniform, laws, ext)
 
 
 @njit(cache=True, error_model="numpy")
-def _slab_flat(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform, ext, period):
+def _slab_flat(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform, laws, ext,
+               period):
     """``_slab_body`` of a flat 2D bed."""
     _slab_body(True, False, period, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out,
-               uniform, ext)
+               uniform, laws, ext)
 
 
 @njit(cache=True, error_model="numpy")
-def _slab_periodic(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform, ext,
-                   period):
+def _slab_periodic(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform, laws,
+                   ext, period):
     """``_slab_body`` in 3D, a box with periodic sides."""
     _slab_body(False, True, period, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out,
-               uniform, ext)
+               uniform, laws, ext)
 
 
 @njit(cache=True, error_model="numpy")
-def _slab_flat_periodic(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform, ext,
-                        period):
+def _slab_flat_periodic(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out, uniform,
+                        laws, ext, period):
     """``_slab_body`` of a flat 2D bed, a box with periodic sides."""
     _slab_body(True, True, period, s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cbuf, ibuf, G, out,
-               uniform, ext)
+               uniform, laws, ext)
 
 
 @njit(cache=True, error_model="numpy")
-def chunk_run(start, stop, flat, state, pp, lists, hist, dt, update, sum_f, sum_c, work, t, period):
+def chunk_run(start, stop, flat, state, pp, lists, hist, dt, update, sum_f, sum_c, work, t, period, laws):
     """The contacts of slabs start, start + 2, … below stop (one parity) with thread t's work rows.
     ``flat``: None, or True for a flat 2D bed. ``period``: None (no periodic side), or (3,) the box's length
     along each periodic axis, 0 elsewhere. Both choose the slab variant when this is compiled: Numba drops a
     branch on ``arg is None`` from the compilation, with the variant it calls, so a run compiles only the
-    variant it uses (the others took 4 - 5 s each of a first run's compiling)."""
+    variant it uses (the others took 4 - 5 s each of a first run's compiling). ``laws``: None where no contact
+    law of the run has rolling friction or adhesion (no row of the table is ``extended``), which leaves the
+    extended law (``_law_ext``) and its gathers and scatters out; else any value (``ext`` of the work arrays
+    then chooses as the run goes)."""
     cbuf, ibuf, G, out, touch, uniform, ext = work
     cb = cbuf[t]
     ib = ibuf[t]
@@ -454,14 +464,15 @@ def chunk_run(start, stop, flat, state, pp, lists, hist, dt, update, sum_f, sum_
         box = np.zeros(3)  # not read: the slabs of a box without periodic sides take no nearest image
         for s in range(start, stop, 2):
             if flat is None:
-                _slab(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform, ext, box)
+                _slab(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform, laws, ext, box)
             else:
-                _slab_flat(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform, ext, box)
+                _slab_flat(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform, laws, ext,
+                           box)
     else:
         for s in range(start, stop, 2):
             if flat is None:
-                _slab_periodic(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform, ext,
-                               period)
+                _slab_periodic(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform, laws,
+                               ext, period)
             else:
                 _slab_flat_periodic(s, state, pp, lists, hist, dt, update, sum_f, sum_c, touch, cb, ib, g, o, uniform,
-                                    ext, period)
+                                    laws, ext, period)

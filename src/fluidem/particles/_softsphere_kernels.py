@@ -146,30 +146,31 @@ def thread_blocks(row_start, slab_start, slab_members, nthreads):
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
-def _chunk_forces_parallel(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, work, period):
+def _chunk_forces_parallel(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, work, period, laws):
     """Phase 0 runs the even slabs, phase 1 the odd ones; thread k the slabs of its block (``thread_blocks``),
     with row k of the work arrays."""
     nthreads = block.shape[0] - 1
     for phase in range(2):
         for k in prange(nthreads):
             chunk_run(block[k] + (block[k] + phase) % 2, block[k + 1], flat, state, pp, lists, hist, dt, update,
-                      sum_f, sum_c, work, np.int64(k), period)
+                      sum_f, sum_c, work, np.int64(k), period, laws)
 
 
 @njit(cache=True, error_model="numpy")
-def _chunk_forces(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, work, period):
+def _chunk_forces(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, work, period, laws):
     """The contacts of all slabs: the even ones, then the odd ones (see ``pair_forces``)."""
     if block.shape[0] > 2:
-        _chunk_forces_parallel(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, work, period)
+        _chunk_forces_parallel(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, work, period, laws)
         return
     nslab = lists[2].shape[0] - 1
     for phase in range(2):
-        chunk_run(phase, nslab, flat, state, pp, lists, hist, dt, update, sum_f, sum_c, work, np.int64(0), period)
+        chunk_run(phase, nslab, flat, state, pp, lists, hist, dt, update, sum_f, sum_c, work, np.int64(0), period,
+                  laws)
 
 
 @njit(cache=True, error_model="numpy")
 def pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
-                dt, update, sum_f, sum_c, block, flat=None, work=None, period=None):
+                dt, update, sum_f, sum_c, block, flat=None, work=None, period=None, laws=True):
     """Add the contact force sums (sum_f) and Σ −n × F_t (sum_c, torque per unit lever arm) per particle.
 
     sum_f and sum_c must be zero on entry (gather_forces leaves them so). The contact law runs vectorised
@@ -183,6 +184,8 @@ def pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, 
     None or too small).
     ``period``: (3,) the box length along each periodic axis, 0 elsewhere (None: no periodic side); centre
     offsets are then taken by nearest image, with a list from ``build_pairs_periodic``.
+    ``laws``: None where no contact law of the run has rolling friction or adhesion (``extended``), which
+    leaves the extended law out of the compilation (``_pair_kernels.chunk_run``); else any value.
     """
     if flat is not None:
         if not flat:
@@ -192,12 +195,12 @@ def pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, 
     nthreads = block.shape[0] - 1
     if work is None:
         _chunk_forces(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat,
-                      make_work(pp, row_start, hist, slab_start, slab_members, nthreads), period)
+                      make_work(pp, row_start, hist, slab_start, slab_members, nthreads), period, laws)
     elif work[0].shape[0] < nthreads:
         _chunk_forces(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat,
-                      make_work(pp, row_start, hist, slab_start, slab_members, nthreads), period)
+                      make_work(pp, row_start, hist, slab_start, slab_members, nthreads), period, laws)
     else:
-        _chunk_forces(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, work, period)
+        _chunk_forces(state, pp, lists, hist, dt, update, sum_f, sum_c, block, flat, work, period, laws)
 
 
 @njit(cache=True, error_model="numpy")
@@ -273,14 +276,16 @@ def wall_contact(i, w, pos, vel, omega, radius, mass, species, pw, wall_now, wal
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _gather_body(flat, lo, hi, pos, vel, omega, radius, mass, species, pw, walls, gravity, ext_force, ext_damping,
-                 has_ext, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2):
+                 has_ext, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2, laws):
     """gather_forces for particles lo..hi−1 (serial code; the parallel driver splits the range).
 
     ``flat`` (a constant where inlined: ``_gather_range`` False, ``_gather_range_flat`` True): a flat 2D bed
     (``is_flat``, ``dim2``): z positions, v_z, ω_x, ω_y stay as they are (their updates add exact zeros)
     and sum_f z, sum_c x, y are not read (the flat pair forces leave them zero).
     ``walls``: (wall_now, wall_normal, wall_axis, wall_hist, wall_touch, near_count, near_wall) in one tuple, as a
-    call of more than 30 arguments is compiled by Python as f(*args), which Numba cannot inline."""
+    call of more than 30 arguments is compiled by Python as f(*args), which Numba cannot inline.
+    ``laws``: None where no contact law of the run has rolling friction or adhesion, which leaves
+    ``contact_force_full`` out of the compilation (as ``pair_forces``'s); else any value."""
     wall_now, wall_normal, wall_axis, wall_hist, wall_touch, near_count, near_wall = walls
     # rolling friction or an adhesive law at some wall: contact_force_full; an adhesive one keeps each contact's
     # pull-off distance in wall_hist[i, w, 3] while it lasts (0 before it forms), as for pairs
@@ -329,38 +334,39 @@ def _gather_body(flat, lo, hi, pos, vel, omega, radius, mass, species, pw, walls
                             wall_hist[i, w, U(e)] = 0.0
                     wall_touch[i, w] = False
                 continue
-            if wext:
-                g0 = wall_hist[i, w, U(ROLLING_HISTORY)] if wroll else 0.0
-                g1 = wall_hist[i, w, U(ROLLING_HISTORY + 1)] if wroll else 0.0
-                g2 = wall_hist[i, w, U(ROLLING_HISTORY + 2)] if wroll else 0.0
-                fn, ftx, fty, ftz, hx, hy, hz, reach, mx, my, mz, gx, gy, gz = contact_force_full(
-                    _law_full(pw, U(species[i]), w), overlap, nx, ny, nz,
-                    vel[i, U(0)] - wall_now[w, U(3)], vel[i, U(1)] - wall_now[w, U(4)],
-                    (0.0 if flat else vel[i, U(2)]) - wall_now[w, U(5)],
-                    0.0 if flat else a * omega[i, U(0)], 0.0 if flat else a * omega[i, U(1)], a * omega[i, U(2)],
-                    0.0 if flat else omega[i, U(0)], 0.0 if flat else omega[i, U(1)], omega[i, U(2)], mass[i], a,
-                    1.4 * mass[i] * a * a, dt, wall_hist[i, w, U(0)], wall_hist[i, w, U(1)], wall_hist[i, w, U(2)],
-                    g0, g1, g2, update)
-                if update:
-                    wall_hist[i, w, U(0)] = hx
-                    wall_hist[i, w, U(1)] = hy
-                    wall_hist[i, w, U(2)] = hz
-                    if wwide:
-                        wall_hist[i, w, U(3)] = reach
-                    if wroll:
-                        wall_hist[i, w, U(ROLLING_HISTORY)] = gx
-                        wall_hist[i, w, U(ROLLING_HISTORY + 1)] = gy
-                        wall_hist[i, w, U(ROLLING_HISTORY + 2)] = gz
-                    wall_touch[i, w] = True
-                # the rolling torque per unit lever (the radius a), as the sums hold it
-                sum_f[i, U(0)] += fn * nx + ftx
-                sum_f[i, U(1)] += fn * ny + fty
-                sum_c[i, U(2)] -= nx * fty - ny * ftx - mz / a
-                if not flat:
-                    sum_f[i, U(2)] += fn * nz + ftz
-                    sum_c[i, U(0)] -= ny * ftz - nz * fty - mx / a
-                    sum_c[i, U(1)] -= nz * ftx - nx * ftz - my / a
-                continue
+            if laws is not None:
+                if wext:
+                    g0 = wall_hist[i, w, U(ROLLING_HISTORY)] if wroll else 0.0
+                    g1 = wall_hist[i, w, U(ROLLING_HISTORY + 1)] if wroll else 0.0
+                    g2 = wall_hist[i, w, U(ROLLING_HISTORY + 2)] if wroll else 0.0
+                    fn, ftx, fty, ftz, hx, hy, hz, reach, mx, my, mz, gx, gy, gz = contact_force_full(
+                        _law_full(pw, U(species[i]), w), overlap, nx, ny, nz,
+                        vel[i, U(0)] - wall_now[w, U(3)], vel[i, U(1)] - wall_now[w, U(4)],
+                        (0.0 if flat else vel[i, U(2)]) - wall_now[w, U(5)],
+                        0.0 if flat else a * omega[i, U(0)], 0.0 if flat else a * omega[i, U(1)], a * omega[i, U(2)],
+                        0.0 if flat else omega[i, U(0)], 0.0 if flat else omega[i, U(1)], omega[i, U(2)], mass[i], a,
+                        1.4 * mass[i] * a * a, dt, wall_hist[i, w, U(0)], wall_hist[i, w, U(1)], wall_hist[i, w, U(2)],
+                        g0, g1, g2, update)
+                    if update:
+                        wall_hist[i, w, U(0)] = hx
+                        wall_hist[i, w, U(1)] = hy
+                        wall_hist[i, w, U(2)] = hz
+                        if wwide:
+                            wall_hist[i, w, U(3)] = reach
+                        if wroll:
+                            wall_hist[i, w, U(ROLLING_HISTORY)] = gx
+                            wall_hist[i, w, U(ROLLING_HISTORY + 1)] = gy
+                            wall_hist[i, w, U(ROLLING_HISTORY + 2)] = gz
+                        wall_touch[i, w] = True
+                    # the rolling torque per unit lever (the radius a), as the sums hold it
+                    sum_f[i, U(0)] += fn * nx + ftx
+                    sum_f[i, U(1)] += fn * ny + fty
+                    sum_c[i, U(2)] -= nx * fty - ny * ftx - mz / a
+                    if not flat:
+                        sum_f[i, U(2)] += fn * nz + ftz
+                        sum_c[i, U(0)] -= ny * ftz - nz * fty - mx / a
+                        sum_c[i, U(1)] -= nz * ftx - nx * ftz - my / a
+                    continue
             # wall_contact written out (an inlined helper taking arrays made Numba copy array references: an
             # atomic reference-count increment and decrement per particle and wall)
             fn, ftx, fty, ftz, hx, hy, hz = contact_force(
@@ -476,21 +482,21 @@ def _gather_body(flat, lo, hi, pos, vel, omega, radius, mass, species, pw, walls
 @njit(cache=True, error_model="numpy")
 def _gather_range(lo, hi, pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_axis, wall_hist, wall_touch,
                   near_count, near_wall, gravity, ext_force, ext_damping, has_ext, dim2, sum_f, sum_c, dt, force, torque,
-                  inv_mass, inv_inertia, mode, ref_pos, limit2):
+                  inv_mass, inv_inertia, mode, ref_pos, limit2, laws):
     """``_gather_body``, general."""
     walls = (wall_now, wall_normal, wall_axis, wall_hist, wall_touch, near_count, near_wall)
     return _gather_body(False, lo, hi, pos, vel, omega, radius, mass, species, pw, walls, gravity, ext_force, ext_damping,
-                        has_ext, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2)
+                        has_ext, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2, laws)
 
 
 @njit(cache=True, error_model="numpy")
 def _gather_range_flat(lo, hi, pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_axis, wall_hist,
                        wall_touch, near_count, near_wall, gravity, ext_force, ext_damping, has_ext, dim2, sum_f, sum_c, dt,
-                       force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2):
+                       force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2, laws):
     """``_gather_body`` of a flat 2D bed."""
     walls = (wall_now, wall_normal, wall_axis, wall_hist, wall_touch, near_count, near_wall)
     return _gather_body(True, lo, hi, pos, vel, omega, radius, mass, species, pw, walls, gravity, ext_force, ext_damping,
-                        has_ext, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2)
+                        has_ext, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2, laws)
 
 
 @njit(cache=True, error_model="numpy")
@@ -594,7 +600,7 @@ def all_walls(n, nw):
 @njit(cache=True, error_model="numpy", parallel=True)
 def _gather_parallel(pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_axis, wall_hist, wall_touch,
                      near_count, near_wall, gravity, ext_force, ext_damping, has_ext, dim2, sum_f, sum_c, dt, force, torque,
-                     inv_mass, inv_inertia, mode, ref_pos, limit2, first, flat):
+                     inv_mass, inv_inertia, mode, ref_pos, limit2, first, flat, laws):
     """Thread k gathers particles first[k] … first[k + 1] − 1."""
     moved = 0
     for k in prange(first.shape[0] - 1):
@@ -602,19 +608,19 @@ def _gather_parallel(pos, vel, omega, radius, mass, species, pw, wall_now, wall_
             moved += _gather_range_flat(first[k], first[k + 1], pos, vel, omega, radius, mass, species, pw, wall_now,
                                         wall_normal, wall_axis, wall_hist, wall_touch, near_count, near_wall, gravity,
                                         ext_force, ext_damping, has_ext, dim2, sum_f, sum_c, dt, force, torque, inv_mass,
-                                        inv_inertia, mode, ref_pos, limit2)
+                                        inv_inertia, mode, ref_pos, limit2, laws)
         else:
             moved += _gather_range(first[k], first[k + 1], pos, vel, omega, radius, mass, species, pw, wall_now,
                                    wall_normal, wall_axis, wall_hist, wall_touch, near_count, near_wall, gravity,
                                    ext_force, ext_damping, has_ext, dim2, sum_f, sum_c, dt, force, torque, inv_mass,
-                                   inv_inertia, mode, ref_pos, limit2)
+                                   inv_inertia, mode, ref_pos, limit2, laws)
     return moved
 
 
 @njit(cache=True, error_model="numpy")
 def gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal, wall_axis,
                   wall_hist, wall_touch, near_count, near_wall, gravity, ext_force, ext_damping, has_ext, dim2, sum_f, sum_c,
-                  t, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2, first, flat=None):
+                  t, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2, first, flat=None, laws=True):
     """Total force and torque per particle: contact sums, walls, gravity, external force.
 
     ``mode`` fuses the integrator into the same pass (one memory sweep per step):
@@ -628,22 +634,23 @@ def gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_
     ``first``: the particle ranges of the threads, slab_start[thread_blocks(…)] (0 and N: one thread, no
     parallel region). Each particle's arithmetic is the same on any number of threads.
     ``flat``: None, or True for a flat 2D bed (``is_flat`` and ``dim2``) after flat pair forces
-    (``_gather_body``); chosen when this is compiled, as ``pair_forces``'s.
+    (``_gather_body``); chosen when this is compiled, as ``pair_forces``'s, and so is ``laws``.
     """
     wall_now = walls_now(wall_motion, wall_point0, t)
     n = pos.shape[0]
     if first.shape[0] > 2:
         return _gather_parallel(pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_axis, wall_hist,
                                 wall_touch, near_count, near_wall, gravity, ext_force, ext_damping, has_ext, dim2, sum_f,
-                                sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2, first, flat)
+                                sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2, first, flat,
+                                laws)
     if flat is not None:
         return _gather_range_flat(np.int64(0), n, pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal,
                                   wall_axis, wall_hist, wall_touch, near_count, near_wall, gravity, ext_force,
                                   ext_damping, has_ext, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia,
-                                  mode, ref_pos, limit2)
+                                  mode, ref_pos, limit2, laws)
     return _gather_range(np.int64(0), n, pos, vel, omega, radius, mass, species, pw, wall_now, wall_normal, wall_axis,
                          wall_hist, wall_touch, near_count, near_wall, gravity, ext_force, ext_damping, has_ext, dim2,
-                         sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2)
+                         sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2, laws)
 
 
 @njit(cache=True, error_model="numpy")
@@ -772,19 +779,19 @@ def reorder(pos, vel, omega, force, torque, radius, mass, inertia, inv_mass, inv
 @njit(cache=True, error_model="numpy")
 def compute_forces(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, wall_point0, wall_normal,
                    wall_hist, gravity, ext_force, ext_damping, dim2, row_start, partner, hist, slab_start, slab_members,
-                   t, dt, update, force, torque, nthreads, period, shapes, flat):
+                   t, dt, update, force, torque, nthreads, period, shapes, flat, laws):
     """Forces and torques at the current state (no integration; history updated only if ``update``).
     ``period`` (3,): the box length along each periodic axis, 0 elsewhere (None: no periodic side). ``shapes``:
     the wall shapes' arrays (``shapes.ShapeSet.kernel_arrays``; their near lists made anew; None: no shape).
-    ``flat``: None, or True for a flat 2D bed (``compute_forces_flat``). The three choose what is compiled, as
-    ``advance``'s.
+    ``flat``: None, or True for a flat 2D bed (``compute_forces_flat``). ``laws``: None where no contact law has
+    rolling friction or adhesion. The four choose what is compiled, as ``advance``'s.
     """
     sum_f = np.zeros_like(force)
     sum_c = np.zeros_like(force)
     block = thread_blocks(row_start, slab_start, slab_members, nthreads)
     pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
                 dt, update, sum_f, sum_c, block, flat, make_work(pp, row_start, hist, slab_start, slab_members, nthreads),
-                period)
+                period, laws)
     if shapes is not None:
         shape_forces(shapes, pos, pos, vel, omega, radius, mass, species, species, np.bool_(True), np.int64(-1), t,
                      dt, update, flat is not None, sum_f, sum_c)
@@ -798,7 +805,7 @@ def compute_forces(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, 
     gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
                   wall_axes(wall_normal), wall_hist, touching_walls(wall_hist), near_count, near_wall, gravity, ext_force,
                   ext_damping, has_ext, dim2, sum_f, sum_c, t, dt, force, torque, mass, mass, forces_only, pos, 0.0,
-                  slab_start[block], flat)
+                  slab_start[block], flat, laws)
 
 
 @njit(cache=True, error_model="numpy")
@@ -806,7 +813,7 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
             wall_motion, wall_point0, wall_normal, wall_hist, gravity, ext_force, ext_damping, dim2,
             row_start, partner, hist, slab_start, slab_members, ref_pos, skin, step0, dt, nsteps, nthreads,
             inertia, ids, reorder_interval, last_reorder, wall_touch, near_count, near_wall, period, box_lo, image,
-            shapes, flat):
+            shapes, flat, laws):
     """Run ``nsteps`` velocity-Verlet DEM steps from step ``step0`` (time step0 * dt).
 
     Order of one step::
@@ -841,14 +848,16 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
     the particles (``bodies_kick_drift`` at the start, ``bodies_step`` after each step's forces).
     ``flat``: None, or True for a flat 2D bed (``dim2`` and ``is_flat``; a flat bed stays flat: in 2D gather_forces
     zeroes F_z and T_x, T_y at every step).
+    ``laws``: None where no contact law of the run (pairs or walls) has rolling friction or adhesion (no row of
+    either table is ``extended``); else any value, the tables' flags then choosing as the run goes.
 
-    ``period``, ``shapes`` and ``flat`` choose what is compiled, down to the slab and gather variants: Numba
+    ``period``, ``shapes``, ``flat`` and ``laws`` choose what is compiled, down to the slab and gather variants: Numba
     leaves out of a compilation a branch that an ``arg is None`` test rules out, with the kernels it calls,
     where the argument's type is None or a literal (``Literal[bool](True)``: a constant passed by another
     compiled function, ``advance_flat``), not where it is a run-time value (``bool``, an array), whose
     compilation keeps both branches. So a run of a flat 2D bed (``advance_flat``) or of a bed that is not
-    flat (``flat`` None), without periodic sides or wall shapes, compiles only the variants it uses
-    (``benchmarks/compile_time.py``).
+    flat (``flat`` None), without periodic sides, wall shapes or extended laws, compiles only the variants it
+    uses (``benchmarks/compile_time.py``).
     """
     limit2 = (0.5 * skin) ** 2
     update = nsteps > 0  # a run-time True, as compute_forces passes it (a literal would compile pair_forces twice)
@@ -895,7 +904,7 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
                        near_count, near_wall, first)
             rebuilds += 1
         pair_forces(pos, vel, omega, radius, mass, species, pp, row_start, partner, slab_start, slab_members, hist,
-                    dt, update, sum_f, sum_c, block, flat, work, period)
+                    dt, update, sum_f, sum_c, block, flat, work, period, laws)
         if shapes is not None:
             shape_step(shapes, pos, ref_pos, vel, omega, radius, mass, species, ids, moved > 0, last_reorder, t, dt,
                        update, flat is not None, sum_f, sum_c)
@@ -903,7 +912,7 @@ def advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia,
         moved = gather_forces(pos, vel, omega, radius, mass, species, pw, wall_motion, wall_point0, wall_normal,
                               wall_axis, wall_hist, wall_touch, near_count, near_wall, gravity, ext_force, ext_damping,
                               has_ext, dim2, sum_f, sum_c, t, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2,
-                              first, flat)
+                              first, flat, laws)
         if shapes is not None:
             if bodies:  # the free bodies' kicks and drift, as the particles' in gather_forces
                 bodies_step(shapes, dt, mode)
@@ -915,21 +924,21 @@ def advance_flat(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_ine
                  wall_motion, wall_point0, wall_normal, wall_hist, gravity, ext_force, ext_damping, dim2,
                  row_start, partner, hist, slab_start, slab_members, ref_pos, skin, step0, dt, nsteps, nthreads,
                  inertia, ids, reorder_interval, last_reorder, wall_touch, near_count, near_wall, period, box_lo, image,
-                 shapes):
+                 shapes, laws):
     """``advance`` of a flat 2D bed: ``flat`` passed as a constant, so that it is compiled without the
     variants of beds that are not flat."""
     return advance(pos, vel, omega, force, torque, radius, mass, inv_mass, inv_inertia, species, pp, pw,
                    wall_motion, wall_point0, wall_normal, wall_hist, gravity, ext_force, ext_damping, dim2,
                    row_start, partner, hist, slab_start, slab_members, ref_pos, skin, step0, dt, nsteps, nthreads,
                    inertia, ids, reorder_interval, last_reorder, wall_touch, near_count, near_wall, period, box_lo,
-                   image, shapes, True)
+                   image, shapes, True, laws)
 
 
 @njit(cache=True, error_model="numpy")
 def compute_forces_flat(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, wall_point0, wall_normal,
                         wall_hist, gravity, ext_force, ext_damping, dim2, row_start, partner, hist, slab_start,
-                        slab_members, t, dt, update, force, torque, nthreads, period, shapes):
+                        slab_members, t, dt, update, force, torque, nthreads, period, shapes, laws):
     """``compute_forces`` of a flat 2D bed (as ``advance_flat``)."""
     compute_forces(pos, vel, omega, radius, mass, species, pp, pw, wall_motion, wall_point0, wall_normal,
                    wall_hist, gravity, ext_force, ext_damping, dim2, row_start, partner, hist, slab_start, slab_members,
-                   t, dt, update, force, torque, nthreads, period, shapes, True)
+                   t, dt, update, force, torque, nthreads, period, shapes, True, laws)

@@ -240,27 +240,29 @@ class SoftSphereEngine(ParticleEngine):
         return np.repeat(np.arange(st.n), np.diff(rs)), partner
 
     # ------------------------------------------------------------ stepping
-    def _variants(self) -> tuple[bool, np.ndarray | None, tuple | None]:
+    def _variants(self) -> tuple[bool, np.ndarray | None, tuple | None, bool | None]:
         """Whether the bed is flat 2D (``K.is_flat``: ``K.advance_flat`` and ``K.compute_forces_flat`` then),
-        and ``period`` and ``shapes`` of the kernels, None where the run has none (no periodic side, no wall
-        shape): they choose what Numba compiles, so that a run compiles only the kernel variants it uses."""
+        and ``period``, ``shapes`` and ``laws`` of the kernels, None where the run has none (no periodic side,
+        no wall shape, no contact law with rolling friction or adhesion): they choose what Numba compiles, so
+        that a run compiles only the kernel variants it uses."""
         st = self.state
         flat = bool(self.dim2 and K.is_flat(st.position, st.velocity, st.omega, self.hist))
+        laws = True if K.extended(self.pp) or K.extended(self.pw) else None
         return (flat, self.period if self.periodic else None,
-                self.shapes.kernel_arrays() if len(self.shapes) else None)
+                self.shapes.kernel_arrays() if len(self.shapes) else None, laws)
 
     def _compute_forces(self, update: bool):
         st = self.state
-        flat, period, shapes = self._variants()
+        flat, period, shapes, laws = self._variants()
         args = (st.position, st.velocity, st.omega, st.radius, st.mass, st.species, self.pp, self.pw,
                 self.wall_motion, self.wall_point0, self.wall_normal, self.wall_hist, self.gravity,
                 self.ext_force, self.ext_damping, self.dim2, self.row_start, self.partner, self.hist, self.slab_start,
                 self.slab_members, self.time, self.dt, update, st.force, st.torque,
                 numba.get_num_threads(), period, shapes)
         if flat:
-            K.compute_forces_flat(*args)
+            K.compute_forces_flat(*args, laws)
         else:
-            K.compute_forces(*args, None)
+            K.compute_forces(*args, None, laws)
 
     def external_force(self) -> np.ndarray:
         """The external (gas) force on each particle at the current velocity, ext_force − c v [N], (N, 3)."""
@@ -271,7 +273,7 @@ class SoftSphereEngine(ParticleEngine):
         if nsteps <= 0:
             return
         st = self.state
-        flat, period, shapes = self._variants()
+        flat, period, shapes, laws = self._variants()
         args = (st.position, st.velocity, st.omega, st.force, st.torque, st.radius, st.mass, self.inv_mass,
                 self.inv_inertia, st.species, self.pp, self.pw, self.wall_motion, self.wall_point0, self.wall_normal,
                 self.wall_hist, self.gravity, self.ext_force, self.ext_damping, self.dim2, self.row_start, self.partner,
@@ -279,7 +281,7 @@ class SoftSphereEngine(ParticleEngine):
                 numba.get_num_threads(), st.inertia, st.ids, self.reorder_interval, self.last_reorder,
                 self.wall_touch, self.near_count, self.near_wall, period, self.box_lo, st.image, shapes)
         (self.row_start, self.partner, self.hist, self.slab_start, self.slab_members, nreb, last_reorder,
-         nreorder, order) = K.advance_flat(*args) if flat else K.advance(*args, None)
+         nreorder, order) = K.advance_flat(*args, laws) if flat else K.advance(*args, None, laws)
         self.shapes.after_advance()
         self.steps += nsteps
         self.time = self.steps * self.dt

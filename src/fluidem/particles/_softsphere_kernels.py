@@ -486,7 +486,8 @@ def _gather_range(lo, hi, pos, vel, omega, radius, mass, species, pw, wall_now, 
     """``_gather_body``, general."""
     walls = (wall_now, wall_normal, wall_axis, wall_hist, wall_touch, near_count, near_wall)
     return _gather_body(False, lo, hi, pos, vel, omega, radius, mass, species, pw, walls, gravity, ext_force, ext_damping,
-                        has_ext, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2, laws)
+                        has_ext, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2,
+                        laws)
 
 
 @njit(cache=True, error_model="numpy")
@@ -496,7 +497,8 @@ def _gather_range_flat(lo, hi, pos, vel, omega, radius, mass, species, pw, wall_
     """``_gather_body`` of a flat 2D bed."""
     walls = (wall_now, wall_normal, wall_axis, wall_hist, wall_touch, near_count, near_wall)
     return _gather_body(True, lo, hi, pos, vel, omega, radius, mass, species, pw, walls, gravity, ext_force, ext_damping,
-                        has_ext, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2, laws)
+                        has_ext, dim2, sum_f, sum_c, dt, force, torque, inv_mass, inv_inertia, mode, ref_pos, limit2,
+                        laws)
 
 
 @njit(cache=True, error_model="numpy")
